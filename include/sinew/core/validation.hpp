@@ -1,0 +1,29 @@
+// Helpers for validating Teuchos parameter lists with messages that name the culprit.
+#pragma once
+
+#include <Teuchos_ParameterList.hpp>
+
+#include <string>
+#include <vector>
+
+namespace sinew {
+
+// The value of `name` in a const list, or `fallback` when absent (Teuchos' defaulting get is non-const).
+template <class T>
+T get_or(const Teuchos::ParameterList& list, const std::string& name, const T& fallback) {
+  return list.isParameter(name) ? list.get<T>(name) : fallback;
+}
+
+// Levenshtein distance, case-insensitive.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+
+// The candidate closest to `name`, or "" when none is reasonably close.
+std::string closest_name(const std::string& name, const std::vector<std::string>& candidates);
+
+// Throws InputError for the first entry of `list` that `valid` does not have (suggesting the closest
+// valid name), and for an entry whose type differs from the valid one. `where` names the sublist
+// in messages, e.g. "Material". Sublists are not descended into.
+void require_known_entries(const Teuchos::ParameterList& list, const Teuchos::ParameterList& valid,
+                           const std::string& where);
+
+}  // namespace sinew

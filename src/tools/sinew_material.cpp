@@ -1,0 +1,222 @@
+// sinew-material: the response of one material point along a load path, as CSV.
+//
+// Paths: uniaxial (stress-free lateral faces: the lateral stretch minimizes the energy, P_yy = P_zz = 0),
+// shear (simple shear F = I + g e_x e_y^T), hydrostatic (F = s I, from 1 down through inversion),
+// F (one user-given deformation gradient).
+#include <sinew/core/errors.hpp>
+#include <sinew/materials/parameters.hpp>
+
+#include <Kokkos_Core.hpp>
+#include <Teuchos_ParameterList.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace sinew;
+
+namespace {
+
+const char* kUsage =
+    "usage: sinew-material [options]\n"
+    "  --model NAME        material model (default stable-neohookean); --list shows all\n"
+    "  --E VALUE           Young's modulus (default 1e5)\n"
+    "  --nu VALUE          Poisson's ratio (default 0.45)\n"
+    "  --projection P      none | clamp | abs (default clamp)\n"
+    "  --param KEY=VALUE   any other 'Material' entry, e.g. --param 'Fung exponent=2'\n"
+    "  --path P            uniaxial | shear | hydrostatic | F (default uniaxial)\n"
+    "  --min X --max X     range of the load parameter (stretch, shear, or scale)\n"
+    "  --steps N           number of intervals (default 48)\n"
+    "  --F a,b,c,...       nine entries of F, row by row (with --path F)\n"
+    "  --output FILE       write the CSV there instead of stdout\n"
+    "  --plot FILE.png     also plot J and the smallest Hessian eigenvalues (needs python3-matplotlib)\n"
+    "CSV columns: stretch,J,psi,P00..P22 (row-major),lateral,min_eig_raw,min_eig_projected\n";
+
+// Smallest eigenvalue of a symmetric 9x9 matrix (Jacobi).
+double min_eig(Mat9 H) {
+  double ev[9], Q[81];
+  jacobi_eigen<9>(H.a, ev, Q);
+  double m = ev[0];
+  for (double e : ev) m = e < m ? e : m;
+  return m;
+}
+
+struct Row {
+  double t, lateral;
+  Mat3 F;
+};
+
+// Lateral stretch t of the uniaxial-stress state diag(s, t, t): the t in (0, 4] that minimizes the
+// energy, found on a grid and refined by golden section. Minimizing (rather than solving P_yy = 0)
+// also finds the collapsed state t -> 0 where corotational has no stress-free root (Sec. 5.2).
+template <class Model>
+double solve_lateral(const Model& m, double s) {
+  auto psi = [&](double t) { return m.energy(Mat3::diag(s, t, t)); };
+  const int n = 400;
+  const double lo = 1e-9, hi = 4.0;
+  int best = 0;
+  double best_e = psi(lo);
+  for (int k = 1; k <= n; ++k) {
+    const double e = psi(lo + (hi - lo) * k / n);
+    if (e < best_e) {
+      best_e = e;
+      best = k;
+    }
+  }
+  double a = lo + (hi - lo) * std::max(best - 1, 0) / n, b = lo + (hi - lo) * std::min(best + 1, n) / n;
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = psi(c), fd = psi(d);
+  for (int it = 0; it < 200 && b - a > 1e-13 * std::max(1.0, b); ++it) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - g * (b - a);
+      fc = psi(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + g * (b - a);
+      fd = psi(d);
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+int run(int argc, char** argv) {
+  std::string model = "stable-neohookean", path = "uniaxial", out_file, plot_file, fstr, projection = "clamp";
+  double E = 1e5, nu = 0.45;
+  double tmin = NAN, tmax = NAN;
+  int steps = 48;
+  Teuchos::ParameterList mat("Material");
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw InputError("option " + a + " needs a value");
+      return argv[++i];
+    };
+    auto number = [&](const std::string& v) {
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0') throw InputError("option " + a + ": '" + v + "' is not a number");
+      return x;
+    };
+    if (a == "--model") model = next();
+    else if (a == "--E") E = number(next());
+    else if (a == "--nu") nu = number(next());
+    else if (a == "--projection") projection = next();
+    else if (a == "--path") path = next();
+    else if (a == "--min") tmin = number(next());
+    else if (a == "--max") tmax = number(next());
+    else if (a == "--steps") steps = static_cast<int>(number(next()));
+    else if (a == "--F") fstr = next();
+    else if (a == "--output") out_file = next();
+    else if (a == "--plot") plot_file = next();
+    else if (a == "--param") {
+      const std::string kv = next();
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos) throw InputError("--param expects KEY=VALUE, got '" + kv + "'");
+      mat.set(kv.substr(0, eq), number(kv.substr(eq + 1)));
+    } else if (a == "--list") {
+      for (const auto& n : material_model_names()) std::cout << n << "\n";
+      return 0;
+    } else if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    } else {
+      throw InputError("unknown option '" + a + "'\n" + kUsage);
+    }
+  }
+  if (steps < 1 || steps > 1000000) throw InputError("--steps must be in [1, 1e6]");
+  mat.set("Model", model);
+  mat.set("Young modulus", E);
+  mat.set("Poisson ratio", nu);
+  mat.set("Projection", projection);
+  const MaterialSpec spec = material_from_parameters(mat);
+
+  std::vector<Row> rows;
+  if (path == "F") {
+    Mat3 F;
+    std::stringstream ss(fstr);
+    std::string item;
+    int k = 0;
+    while (std::getline(ss, item, ',')) {
+      if (k >= 9) break;
+      F(k / 3, k % 3) = std::stod(item);
+      ++k;
+    }
+    if (k != 9) throw InputError("--F needs nine comma-separated numbers, row by row");
+    rows.push_back({1.0, NAN, F});
+  } else if (path == "uniaxial" || path == "shear" || path == "hydrostatic") {
+    const double d0 = path == "hydrostatic" ? 1.0 : (path == "shear" ? 0.0 : 1.0);
+    const double d1 = path == "hydrostatic" ? -0.5 : (path == "shear" ? 2.0 : 3.4);
+    if (std::isnan(tmin)) tmin = d0;
+    if (std::isnan(tmax)) tmax = d1;
+    double t_lat = 1.0;
+    for (int k = 0; k <= steps; ++k) {
+      const double t = tmin + (tmax - tmin) * k / steps;
+      Row r{t, NAN, Mat3::identity()};
+      if (path == "uniaxial") {
+        with_material(spec, [&](auto m) { t_lat = solve_lateral(m, t); });
+        r.lateral = t_lat;
+        r.F = Mat3::diag(t, t_lat, t_lat);
+      } else if (path == "shear") {
+        r.F(0, 1) = t;
+      } else {
+        r.F = Mat3::diag(t, t, t);
+      }
+      rows.push_back(r);
+    }
+  } else {
+    throw InputError("unknown --path '" + path + "' (uniaxial, shear, hydrostatic, F)");
+  }
+
+  std::ofstream file;
+  if (!out_file.empty()) {
+    file.open(out_file);
+    if (!file) throw InputError("cannot write '" + out_file + "'");
+  }
+  std::ostream& os = out_file.empty() ? std::cout : file;
+  os.precision(10);
+  os << "stretch,J,psi,P00,P01,P02,P10,P11,P12,P20,P21,P22,lateral,min_eig_raw,min_eig_projected\n";
+  with_material(spec, [&](auto m) {
+    for (const Row& r : rows) {
+      const Mat3 P = m.pk1(r.F);
+      os << r.t << "," << det(r.F) << "," << m.energy(r.F);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) os << "," << P(i, j);
+      os << "," << r.lateral << "," << min_eig(m.hessian(r.F)) << ","
+         << min_eig(m.projected_hessian(r.F, spec.projection == Projection::None ? Projection::Clamp : spec.projection))
+         << "\n";
+    }
+  });
+  std::cerr << "sinew-material: " << describe(spec) << ", path " << path << ", " << rows.size() << " points\n";
+  if (!plot_file.empty()) {
+    if (out_file.empty()) throw InputError("--plot needs --output FILE.csv");
+    file.close();
+    const std::string cmd = "python3 \"" SINEW_SOURCE_DIR "/scripts/plot_material.py\" \"" + out_file + "\" \"" +
+                            plot_file + "\" \"" + describe(spec) + "\"";
+    if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed (is python3-matplotlib installed?)");
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const InputError& e) {
+    std::cerr << "sinew-material: input error: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "sinew-material: error: " << e.what() << "\n";
+    return 1;
+  }
+}
