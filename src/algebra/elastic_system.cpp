@@ -1,0 +1,218 @@
+#include "assembly.hpp"
+
+#include <sinew/core/errors.hpp>
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Tpetra_CrsGraph.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_MultiVector.hpp>
+#include <Tpetra_Vector.hpp>
+
+#include <algorithm>
+
+namespace sinew {
+
+namespace {
+
+Teuchos::RCP<const Map> make_map(const std::vector<GO>& gids, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+  const Tpetra::global_size_t invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+  return Teuchos::rcp(new Map(invalid, Teuchos::ArrayView<const GO>(gids.data(), gids.size()), 0, comm));
+}
+
+std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t count) {
+  std::vector<GO> out(3 * count);
+  for (std::size_t n = 0; n < count; ++n)
+    for (int c = 0; c < 3; ++c) out[3 * n + c] = 3 * static_cast<GO>(node_gids[n]) + c;
+  return out;
+}
+
+}  // namespace
+
+ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialSpec& material)
+    : comm_(std::move(comm)), mesh_(std::move(mesh)), material_(material) {
+  elements_ = compute_element_data(mesh_, *comm_);
+
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  std::vector<GO> owned_node_gids(mesh_.node_gid.begin(), mesh_.node_gid.begin() + n_owned);
+  owned_nodes_ = make_map(owned_node_gids, comm_);
+  owned_dofs_ = make_map(dof_gids(mesh_.node_gid, n_owned), comm_);
+  overlap_dofs_ = make_map(dof_gids(mesh_.node_gid, n_local), comm_);
+  importer_ = Teuchos::rcp(new Import(owned_dofs_, overlap_dofs_));
+  u_overlap_ = Teuchos::rcp(new Vector(overlap_dofs_));
+  fixed_ = Kokkos::View<char*>("fixed", 3 * n_local);
+
+  // Graph, once: each owned node couples to every node of every element around it.
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
+  const int npe = nodes_per_element(mesh_.type);
+  std::vector<std::vector<int>> neighbours(n_owned);
+  for (std::size_t e = 0; e < mesh_.local_elements(); ++e)
+    for (int a = 0; a < npe; ++a) {
+      const int na = conn(e, a);
+      if (static_cast<std::size_t>(na) >= n_owned) continue;
+      for (int b = 0; b < npe; ++b) neighbours[na].push_back(conn(e, b));
+    }
+  std::vector<std::size_t> counts(3 * n_owned);
+  for (std::size_t n = 0; n < n_owned; ++n) {
+    auto& nb = neighbours[n];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    for (int c = 0; c < 3; ++c) counts[3 * n + c] = 3 * nb.size();
+  }
+  auto graph = Teuchos::rcp(new CrsGraph(owned_dofs_, overlap_dofs_, Teuchos::ArrayView<const std::size_t>(counts)));
+  std::vector<LO> cols;
+  for (std::size_t n = 0; n < n_owned; ++n) {
+    cols.clear();
+    for (int m : neighbours[n])
+      for (int c = 0; c < 3; ++c) cols.push_back(3 * m + c);
+    for (int c = 0; c < 3; ++c) graph->insertLocalIndices(static_cast<LO>(3 * n + c), Teuchos::ArrayView<const LO>(cols));
+  }
+  graph->fillComplete(owned_dofs_, owned_dofs_);
+  graph_ = graph;
+
+  // Reference volume of the owned elements, summed over ranks.
+  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), elements_.wdetJ);
+  double local = 0.0;
+  for (std::size_t p = 0; p < mesh_.n_owned_elements * static_cast<std::size_t>(elements_.nqp); ++p) local += w(p);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(reference_volume_));
+}
+
+ElasticSystem::~ElasticSystem() = default;
+
+Teuchos::RCP<CrsMatrix> ElasticSystem::create_matrix() const { return Teuchos::rcp(new CrsMatrix(graph_)); }
+Teuchos::RCP<Vector> ElasticSystem::create_vector() const { return Teuchos::rcp(new Vector(owned_dofs_)); }
+
+void ElasticSystem::set_fixed_dofs(const std::vector<int>& overlap_dofs) {
+  auto h = Kokkos::create_mirror_view(fixed_);
+  Kokkos::deep_copy(h, 0);
+  fixed_owned_.clear();
+  const int n_owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
+  for (int d : overlap_dofs) {
+    if (d < 0 || static_cast<std::size_t>(d) >= h.extent(0)) throw std::out_of_range("set_fixed_dofs: bad DOF index");
+    h(d) = 1;
+  }
+  for (int d = 0; d < n_owned_dofs; ++d)
+    if (h(d)) fixed_owned_.push_back(d);
+  Kokkos::deep_copy(fixed_, h);
+}
+
+std::size_t ElasticSystem::global_fixed_dofs() const {
+  std::size_t local = fixed_owned_.size(), global = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(global));
+  return global;
+}
+
+void ElasticSystem::set_body_force(const std::array<double, 3>& f) { body_ = f; }
+
+EvaluationTotals ElasticSystem::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend) const {
+  return run(u, force, K, backend, false, {}, {});
+}
+
+void ElasticSystem::element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const {
+  Kokkos::View<double*> p("elem_psi", mesh_.n_owned_elements), j("elem_J", mesh_.n_owned_elements);
+  run(u, nullptr, nullptr, Backend::Default, true, p, j);
+  auto ph = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p);
+  auto jh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), j);
+  psi.assign(ph.data(), ph.data() + ph.extent(0));
+  J.assign(jh.data(), jh.data() + jh.extent(0));
+}
+
+EvaluationTotals ElasticSystem::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, bool fields,
+                                    Kokkos::View<double*> psi, Kokkos::View<double*> J) const {
+  u_overlap_->doImport(u, *importer_, Tpetra::INSERT);
+  if (force) force->putScalar(0.0);
+  if (K) {
+    K->resumeFill();
+    K->setAllToScalar(0.0);
+  }
+  AssemblyTotals t;
+  {
+    detail::Views v;
+    v.conn = mesh_.conn;
+    v.dNdX = elements_.dNdX;
+    v.wdetJ = elements_.wdetJ;
+    auto u_view = u_overlap_->getLocalViewDevice(Tpetra::Access::ReadOnly);
+    v.u = Kokkos::subview(u_view, Kokkos::ALL(), 0);
+    v.fixed = fixed_;
+    Kokkos::View<double**, Kokkos::LayoutLeft, Vector::device_type> f_view;
+    if (force) {
+      f_view = force->getLocalViewDevice(Tpetra::Access::ReadWrite);
+      v.force = Kokkos::subview(f_view, Kokkos::ALL(), 0);
+    }
+    if (K) {
+      v.matrix = K->getLocalMatrixDevice();
+      v.want_matrix = true;
+    }
+    if (fields) {
+      v.elem_psi = psi;
+      v.elem_J = J;
+    }
+    v.n_owned_elements = static_cast<int>(mesh_.n_owned_elements);
+    v.n_owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
+    for (int i = 0; i < 3; ++i) v.body[i] = body_[i];
+    v.projection = material_.projection;
+    const int ne = static_cast<int>(mesh_.local_elements());
+    const bool hex = mesh_.type == ElementType::Hex8;
+#if defined(KOKKOS_ENABLE_SERIAL)
+    if (backend == Backend::Serial) {
+      t = hex ? detail::assemble_hex8<Kokkos::Serial>(material_, v, ne) : detail::assemble_tet4<Kokkos::Serial>(material_, v, ne);
+    } else
+#endif
+    {
+      (void)backend;
+      t = hex ? detail::assemble_hex8<Kokkos::DefaultExecutionSpace>(material_, v, ne)
+              : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(material_, v, ne);
+    }
+    Kokkos::fence();
+  }
+  if (K) K->fillComplete(owned_dofs_, owned_dofs_);
+
+  EvaluationTotals g;
+  const double sums[2] = {t.energy, t.volume};
+  double gsums[2];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 2, sums, gsums);
+  g.energy = gsums[0];
+  g.volume = gsums[1];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, t.min_J, Teuchos::outArg(g.min_J));
+  const long long counts[2] = {t.inverted, t.undefined};
+  long long gcounts[2];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 2, counts, gcounts);
+  g.inverted = gcounts[0];
+  g.undefined = gcounts[1];
+  return g;
+}
+
+Teuchos::RCP<MultiVector> ElasticSystem::coordinates() const {
+  auto X = Teuchos::rcp(new MultiVector(owned_nodes_, 3));
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
+  auto v = X->getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) v(n, d) = Xh(n, d);
+  return X;
+}
+
+Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes() const {
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
+  double local[4] = {0, 0, 0, static_cast<double>(mesh_.n_owned_nodes)}, global[4];
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) local[d] += Xh(n, d);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 4, local, global);
+  const double c[3] = {global[0] / global[3], global[1] / global[3], global[2] / global[3]};
+  auto modes = Teuchos::rcp(new MultiVector(owned_dofs_, 6));
+  auto v = modes->getLocalViewHost(Tpetra::Access::OverwriteAll);
+  Kokkos::deep_copy(v, 0.0);
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n) {
+    const double x = Xh(n, 0) - c[0], y = Xh(n, 1) - c[1], z = Xh(n, 2) - c[2];
+    for (int d = 0; d < 3; ++d) v(3 * n + d, d) = 1.0;  // translations
+    // rotations omega x (X - c) about x, y, z
+    v(3 * n + 1, 3) = -z;
+    v(3 * n + 2, 3) = y;
+    v(3 * n + 0, 4) = z;
+    v(3 * n + 2, 4) = -x;
+    v(3 * n + 0, 5) = -y;
+    v(3 * n + 1, 5) = x;
+  }
+  return modes;
+}
+
+}  // namespace sinew

@@ -1,0 +1,225 @@
+#include <sinew/core/errors.hpp>
+#include <sinew/core/validation.hpp>
+#include <sinew/discretization/mesh.hpp>
+
+#include <Teuchos_Array.hpp>
+#include <Teuchos_ParameterList.hpp>
+
+#include <cmath>
+#include <sstream>
+
+namespace sinew {
+
+std::string to_string(ElementType t) { return t == ElementType::Hex8 ? "hex8" : "tet4"; }
+
+Teuchos::ParameterList valid_mesh_parameters() {
+  Teuchos::ParameterList v("Mesh");
+  v.set("Type", std::string("box"), "box | cylinder (voxelized, axis along z)");
+  v.set("Element", std::string("hex8"), "hex8 (2x2x2 Gauss) | tet4 (each hex split into 6 tets, 1 point)");
+  v.set("Elements", Teuchos::Array<int>({4, 4, 4}), "cells along x, y, z (cylinder: across the diameter, across, along)");
+  v.set("Lower corner", Teuchos::Array<double>({0.0, 0.0, 0.0}), "box: lower corner");
+  v.set("Upper corner", Teuchos::Array<double>({1.0, 1.0, 1.0}), "box: upper corner");
+  v.set("Radius", 0.5, "cylinder: radius");
+  v.set("Length", 1.0, "cylinder: length along z (from z = 0)");
+  return v;
+}
+
+MeshSpec mesh_from_parameters(const Teuchos::ParameterList& in) {
+  const Teuchos::ParameterList valid = valid_mesh_parameters();
+  require_known_entries(in, valid, "Mesh");
+  auto get_arr = [&](const char* key, auto def) {
+    using A = decltype(def);
+    return in.isParameter(key) ? in.get<A>(key) : valid.get<A>(key);
+  };
+  MeshSpec s;
+  s.shape = get_or<std::string>(in, "Type", "box");
+  if (s.shape != "box" && s.shape != "cylinder")
+    throw InputError("Mesh: 'Type' must be box or cylinder, got \"" + s.shape + "\"");
+  const std::string el = get_or<std::string>(in, "Element", "hex8");
+  if (el == "hex8")
+    s.element = ElementType::Hex8;
+  else if (el == "tet4")
+    s.element = ElementType::Tet4;
+  else
+    throw InputError("Mesh: 'Element' must be hex8 or tet4, got \"" + el + "\"");
+  const auto n = get_arr("Elements", Teuchos::Array<int>());
+  if (n.size() != 3) throw InputError("Mesh: 'Elements' needs 3 entries, got " + std::to_string(n.size()));
+  for (int k = 0; k < 3; ++k) {
+    if (n[k] < 1 || n[k] > 100000)
+      throw InputError("Mesh: 'Elements' entries must lie in [1, 100000], got " + std::to_string(n[k]));
+    s.cells[k] = n[k];
+  }
+  if (s.shape == "box") {
+    const auto lo = get_arr("Lower corner", Teuchos::Array<double>()), hi = get_arr("Upper corner", Teuchos::Array<double>());
+    if (lo.size() != 3) throw InputError("Mesh: 'Lower corner' needs 3 entries");
+    if (hi.size() != 3) throw InputError("Mesh: 'Upper corner' needs 3 entries");
+    for (int k = 0; k < 3; ++k) {
+      s.lower[k] = lo[k];
+      s.upper[k] = hi[k];
+      if (!(hi[k] > lo[k]) || !std::isfinite(lo[k]) || !std::isfinite(hi[k]))
+        throw InputError("Mesh: 'Upper corner' must exceed 'Lower corner' in every coordinate");
+    }
+  } else {
+    const double R = get_or<double>(in, "Radius", 0.5), L = get_or<double>(in, "Length", 1.0);
+    if (!(R > 0.0) || !std::isfinite(R)) throw InputError("Mesh: 'Radius' must be positive");
+    if (!(L > 0.0) || !std::isfinite(L)) throw InputError("Mesh: 'Length' must be positive");
+    s.lower = {-R, -R, 0.0};
+    s.upper = {R, R, L};
+  }
+  return s;
+}
+
+namespace {
+
+// Active cells and nodes of one x-y layer, with compact numbering.
+struct Pattern {
+  int nx = 0, ny = 0;
+  std::vector<int> cell_index;  // nx*ny, -1 where inactive
+  std::vector<int> node_index;  // (nx+1)*(ny+1), -1 where no active cell touches the node
+  int cells = 0, nodes = 0;
+  int node(int i, int j) const { return node_index[i + (nx + 1) * j]; }
+};
+
+Pattern make_pattern(const MeshSpec& s) {
+  Pattern p;
+  p.nx = s.cells[0];
+  p.ny = s.cells[1];
+  p.cell_index.assign(static_cast<std::size_t>(p.nx) * p.ny, -1);
+  p.node_index.assign(static_cast<std::size_t>(p.nx + 1) * (p.ny + 1), -1);
+  for (int j = 0; j < p.ny; ++j) {
+    for (int i = 0; i < p.nx; ++i) {
+      bool active = true;
+      if (s.shape == "cylinder") {  // cell centre inside the inscribed ellipse of the x-y box
+        const double u = (i + 0.5) / p.nx * 2.0 - 1.0, v = (j + 0.5) / p.ny * 2.0 - 1.0;
+        active = u * u + v * v <= 1.0;
+      }
+      if (active) p.cell_index[i + p.nx * j] = 0;
+    }
+  }
+  for (int j = 0; j < p.ny; ++j)
+    for (int i = 0; i < p.nx; ++i) {
+      int& c = p.cell_index[i + p.nx * j];
+      if (c < 0) continue;
+      c = p.cells++;
+      for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di) p.node_index[(i + di) + (p.nx + 1) * (j + dj)] = 0;
+    }
+  for (auto& n : p.node_index)
+    if (n >= 0) n = p.nodes++;
+  return p;
+}
+
+// Kuhn split of a hex (VTK node order) into six positively oriented tets around the diagonal 0-6.
+constexpr int kTets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+
+}  // namespace
+
+Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
+  const int P = comm.getSize(), r = comm.getRank();
+  const int nz = spec.cells[2];
+  if (nz < P)
+    throw InputError("Mesh: " + std::to_string(nz) + " element layers along z cannot be split over " +
+                     std::to_string(P) + " MPI ranks (need at least one layer per rank)");
+  const Pattern pat = make_pattern(spec);
+  if (pat.cells == 0) throw InputError("Mesh: the shape has no active cells; increase 'Elements'");
+
+  Mesh m;
+  m.type = spec.element;
+  m.lower = spec.lower;
+  m.upper = spec.upper;
+  m.global_nodes = static_cast<GlobalId>(pat.nodes) * (nz + 1);
+  const GlobalId hexes = static_cast<GlobalId>(pat.cells) * nz;
+  m.global_elements = spec.element == ElementType::Hex8 ? hexes : 6 * hexes;
+
+  const int k0 = static_cast<int>(static_cast<long long>(r) * nz / P);
+  const int k1 = static_cast<int>(static_cast<long long>(r + 1) * nz / P);
+  const bool last = r == P - 1;
+  // Node layers: owned [k0, k1) (and nz on the last rank); ghosts k0-1 (below) and k1 (above).
+  std::vector<int> layers;
+  for (int k = k0; k < k1; ++k) layers.push_back(k);
+  if (last) layers.push_back(nz);
+  const std::size_t owned_layers = layers.size();
+  if (r > 0) layers.push_back(k0 - 1);
+  if (!last) layers.push_back(k1);
+  std::vector<int> layer_slot(nz + 1, -1);
+  for (std::size_t s = 0; s < layers.size(); ++s) layer_slot[layers[s]] = static_cast<int>(s);
+
+  const std::size_t nloc = layers.size() * pat.nodes;
+  m.node_gid.resize(nloc);
+  m.n_owned_nodes = owned_layers * pat.nodes;
+  m.X = Kokkos::View<double* [3]>("X", nloc);
+  auto Xh = Kokkos::create_mirror_view(m.X);
+  const double dx[3] = {(spec.upper[0] - spec.lower[0]) / spec.cells[0], (spec.upper[1] - spec.lower[1]) / spec.cells[1],
+                        (spec.upper[2] - spec.lower[2]) / nz};
+  for (std::size_t s = 0; s < layers.size(); ++s) {
+    const int k = layers[s];
+    for (int j = 0; j <= pat.ny; ++j)
+      for (int i = 0; i <= pat.nx; ++i) {
+        const int n2 = pat.node(i, j);
+        if (n2 < 0) continue;
+        const std::size_t l = s * pat.nodes + n2;
+        m.node_gid[l] = static_cast<GlobalId>(k) * pat.nodes + n2;
+        Xh(l, 0) = spec.lower[0] + i * dx[0];
+        Xh(l, 1) = spec.lower[1] + j * dx[1];
+        Xh(l, 2) = spec.lower[2] + k * dx[2];
+      }
+  }
+  Kokkos::deep_copy(m.X, Xh);
+  auto local_node = [&](int i, int j, int k) { return layer_slot[k] * pat.nodes + pat.node(i, j); };
+
+  // Element layers: owned [k0, k1), ghost k0-1.
+  std::vector<int> elayers;
+  for (int k = k0; k < k1; ++k) elayers.push_back(k);
+  const std::size_t owned_elayers = elayers.size();
+  if (r > 0) elayers.push_back(k0 - 1);
+  const int per_hex = spec.element == ElementType::Hex8 ? 1 : 6;
+  const int npe = nodes_per_element(spec.element);
+  const std::size_t ne = elayers.size() * pat.cells * per_hex;
+  m.n_owned_elements = owned_elayers * pat.cells * per_hex;
+  m.element_gid.resize(ne);
+  m.conn = Kokkos::View<int**>("conn", ne, npe);
+  auto Ch = Kokkos::create_mirror_view(m.conn);
+  std::size_t e = 0;
+  for (int k : elayers) {
+    for (int j = 0; j < pat.ny; ++j)
+      for (int i = 0; i < pat.nx; ++i) {
+        const int c2 = pat.cell_index[i + pat.nx * j];
+        if (c2 < 0) continue;
+        const int hex[8] = {local_node(i, j, k),         local_node(i + 1, j, k),     local_node(i + 1, j + 1, k),
+                            local_node(i, j + 1, k),     local_node(i, j, k + 1),     local_node(i + 1, j, k + 1),
+                            local_node(i + 1, j + 1, k + 1), local_node(i, j + 1, k + 1)};
+        const GlobalId hex_gid = static_cast<GlobalId>(k) * pat.cells + c2;
+        if (spec.element == ElementType::Hex8) {
+          for (int a = 0; a < 8; ++a) Ch(e, a) = hex[a];
+          m.element_gid[e++] = hex_gid;
+        } else {
+          for (int t = 0; t < 6; ++t) {
+            for (int a = 0; a < 4; ++a) Ch(e, a) = hex[kTets[t][a]];
+            m.element_gid[e++] = 6 * hex_gid + t;
+          }
+        }
+      }
+  }
+  Kokkos::deep_copy(m.conn, Ch);
+  return m;
+}
+
+std::vector<int> select_nodes(const Mesh& mesh, const std::function<bool(const std::array<double, 3>&)>& pred) {
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  std::vector<int> out;
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n)
+    if (pred({Xh(n, 0), Xh(n, 1), Xh(n, 2)})) out.push_back(static_cast<int>(n));
+  return out;
+}
+
+std::function<bool(const std::array<double, 3>&)> face_predicate(const Mesh& mesh, const std::string& face) {
+  if (face.size() != 2 || face[0] < 'x' || face[0] > 'z' || (face[1] != '-' && face[1] != '+'))
+    throw InputError("face '" + face + "' is not one of x-, x+, y-, y+, z-, z+");
+  const int axis = face[0] - 'x';
+  const bool upper = face[1] == '+';
+  const double target = upper ? mesh.upper[axis] : mesh.lower[axis];
+  const double tol = 1e-9 * (mesh.upper[axis] - mesh.lower[axis]);
+  return [=](const std::array<double, 3>& X) { return std::fabs(X[axis] - target) <= tol; };
+}
+
+}  // namespace sinew

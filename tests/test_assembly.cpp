@@ -1,0 +1,400 @@
+// Discretization and assembly: meshes, element data, distributed Tpetra assembly checked against finite
+// differences, rigid motions, volumes, Dirichlet elimination, and agreement between backends and ranks.
+// Runs as is on 1 rank (unit), with 2 OpenMP threads, and on 2 MPI ranks.
+#include "material_test_utils.hpp"
+
+#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/core/errors.hpp>
+
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <Tpetra_Core.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_Vector.hpp>
+#include <gtest/gtest.h>
+
+#include <map>
+
+using namespace sinew;
+
+namespace {
+
+auto world() { return Tpetra::getDefaultComm(); }
+
+MaterialSpec material(MaterialModel m = MaterialModel::StableNeoHookean, double E = 1.0, double nu = 0.45,
+                      Projection p = Projection::None) {
+  MaterialSpec s = test::all_models(E, nu)[static_cast<std::size_t>(m)];
+  s.projection = p;
+  return s;
+}
+
+MeshSpec box(int n, ElementType t = ElementType::Hex8, int nz = -1) {
+  MeshSpec s;
+  s.element = t;
+  s.cells = {n, n, nz > 0 ? nz : n};
+  s.lower = {0.0, 0.0, 0.0};
+  s.upper = {1.0, 0.8, 1.2};
+  return s;
+}
+
+// Whole vector on every rank, indexed by global id.
+std::vector<double> gather(const Vector& v) {
+  auto map = v.getMap();
+  auto all = Tpetra::createLocalMapWithNode<LO, GO, NodeType>(map->getGlobalNumElements(), map->getComm());
+  Vector full(all);
+  Import imp(map, all);
+  full.doImport(v, imp, Tpetra::INSERT);
+  auto h = full.getLocalViewHost(Tpetra::Access::ReadOnly);
+  return std::vector<double>(h.data(), h.data() + h.extent(0));
+}
+
+// Sets u from a function of the reference position and component, on owned DOFs.
+template <class Fn>
+void set_displacement(const ElasticSystem& sys, Vector& u, Fn&& fn) {
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  auto v = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n) {
+    const std::array<double, 3> x{X(n, 0), X(n, 1), X(n, 2)};
+    for (int c = 0; c < 3; ++c) v(3 * n + c, 0) = fn(x, c, sys.mesh().node_gid[n]);
+  }
+}
+
+// Deterministic pseudo-random number in [-1, 1] from a node id and component (same on every rank).
+double hash_unit(long long gid, int c, int salt = 0) {
+  std::uint64_t x = static_cast<std::uint64_t>(gid) * 3 + c + 0x9E3779B97F4A7C15ull * (salt + 1);
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  x ^= x >> 31;
+  return 2.0 * (static_cast<double>(x >> 11) / 9007199254740992.0) - 1.0;
+}
+
+// Dense copy of a distributed matrix on every rank (small test matrices only), via columns K e_j.
+std::vector<std::vector<double>> dense(const CrsMatrix& K) {
+  const std::size_t n = K.getGlobalNumRows();
+  std::vector<std::vector<double>> D(n, std::vector<double>(n));
+  Vector e(K.getDomainMap()), col(K.getRangeMap());
+  for (std::size_t j = 0; j < n; ++j) {
+    e.putScalar(0.0);
+    if (K.getDomainMap()->isNodeGlobalElement(static_cast<GO>(j))) e.replaceGlobalValue(static_cast<GO>(j), 1.0);
+    K.apply(e, col);
+    const auto c = gather(col);
+    for (std::size_t i = 0; i < n; ++i) D[i][j] = c[i];
+  }
+  return D;
+}
+
+double max_abs(const std::vector<std::vector<double>>& A) {
+  double m = 0.0;
+  for (const auto& r : A)
+    for (double x : r) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+// Smallest eigenvalue of a dense symmetric matrix (LAPACK).
+double min_eigenvalue(const std::vector<std::vector<double>>& A) {
+  const int n = static_cast<int>(A.size());
+  std::vector<double> a(n * n), w(n), work(64 * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) a[i + n * j] = 0.5 * (A[i][j] + A[j][i]);
+  int info = 0;
+  Teuchos::LAPACK<int, double>().SYEV('N', 'U', n, a.data(), n, w.data(), work.data(), 64 * n, &info);
+  EXPECT_EQ(info, 0);
+  return w[0];
+}
+
+}  // namespace
+
+TEST(Mesh, CountsOwnershipAndGhosts) {
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    const Mesh m = build_mesh(box(3, type, 4), *world());
+    EXPECT_EQ(m.global_nodes, 4 * 4 * 5);
+    EXPECT_EQ(m.global_elements, (type == ElementType::Hex8 ? 1 : 6) * 3 * 3 * 4);
+    long long owned = static_cast<long long>(m.n_owned_nodes), total = 0;
+    Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
+    EXPECT_EQ(total, m.global_nodes);
+    long long oe = static_cast<long long>(m.n_owned_elements), te = 0;
+    Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, oe, Teuchos::outArg(te));
+    EXPECT_EQ(te, m.global_elements);
+    // A rank holds its slab plus at most one ghost layer, not the whole mesh.
+    if (world()->getSize() > 1) {
+      EXPECT_LT(m.local_nodes(), static_cast<std::size_t>(m.global_nodes));
+    }
+  }
+}
+
+TEST(Mesh, VoxelCylinder) {
+  MeshSpec s;
+  s.shape = "cylinder";
+  s.cells = {8, 8, 6};
+  s.lower = {-1, -1, 0};
+  s.upper = {1, 1, 3};
+  const Mesh m = build_mesh(s, *world());
+  ElasticSystem sys(world(), m, material());
+  // The voxelized disk of 8x8 cells keeps the cells whose centres lie inside: 52 of 64.
+  EXPECT_EQ(m.global_elements, 52 * 6);
+  EXPECT_NEAR(sys.reference_volume(), 52 * (0.25 * 0.25 * 0.5) * 6, 1e-12);
+}
+
+TEST(Mesh, RejectsInvertedRestElement) {
+  Mesh m = build_mesh(box(2), *world());
+  // Move one owned node of the first rank far through its element, collectively.
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
+  for (std::size_t n = 0; n < m.local_nodes(); ++n)
+    if (m.node_gid[n] == 0) Xh(n, 0) = 5.0;  // node 0 beyond its neighbour at x = 0.5
+  Kokkos::deep_copy(m.X, Xh);
+  try {
+    ElasticSystem sys(world(), m, material());
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("element 0 has a non-positive rest volume"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Assembly, RestStateHasZeroForceAndEnergy) {
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    for (const auto& spec : test::all_models(1.0, 0.45)) {
+      ElasticSystem sys(world(), build_mesh(box(3, type), *world()), spec);
+      auto u = sys.create_vector();
+      u->putScalar(0.0);
+      auto f = sys.create_vector();
+      const auto t = sys.evaluate(*u, f.get(), nullptr);
+      EXPECT_NEAR(t.energy, 0.0, 1e-13) << to_string(spec.model);
+      EXPECT_LT(f->normInf(), 1e-13) << to_string(spec.model);
+      EXPECT_NEAR(t.volume, 0.96, 1e-12);
+      EXPECT_NEAR(t.min_J, 1.0, 1e-14);
+    }
+  }
+}
+
+TEST(Assembly, RigidRotationHasZeroForce) {
+  std::mt19937_64 rng(3);
+  const Mat3 R = test::random_rotation(rng);
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    for (const auto& spec : test::all_models(1.0, 0.45)) {
+      ElasticSystem sys(world(), build_mesh(box(3, type), *world()), spec);
+      auto u = sys.create_vector();
+      set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) {
+        return R(c, 0) * X[0] + R(c, 1) * X[1] + R(c, 2) * X[2] - X[c];
+      });
+      auto f = sys.create_vector();
+      const auto t = sys.evaluate(*u, f.get(), nullptr);
+      EXPECT_NEAR(t.energy, 0.0, 1e-11) << to_string(spec.model);
+      EXPECT_LT(f->normInf(), 1e-11) << to_string(spec.model) << " " << to_string(type);
+      EXPECT_NEAR(t.volume, 0.96, 1e-12);
+    }
+  }
+}
+
+TEST(Assembly, AffineVolumeEqualsSumOfJ) {
+  const double A[3][3] = {{1.2, 0.3, -0.1}, {0.05, 0.9, 0.2}, {0.1, -0.2, 1.1}};
+  Mat3 Am;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) Am(i, j) = A[i][j];
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    ElasticSystem sys(world(), build_mesh(box(3, type), *world()), material());
+    auto u = sys.create_vector();
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) {
+      return A[c][0] * X[0] + A[c][1] * X[1] + A[c][2] * X[2] - X[c];
+    });
+    const auto t = sys.evaluate(*u, nullptr, nullptr);
+    EXPECT_NEAR(t.volume, det(Am) * 0.96, 1e-12);
+    EXPECT_NEAR(t.min_J, det(Am), 1e-12);
+  }
+}
+
+TEST(Assembly, ForceIsGradientOfEnergy) {
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    for (const auto& spec0 : test::all_models(1.0, 0.45)) {
+      if (type == ElementType::Tet4 && spec0.model != MaterialModel::StableNeoHookean &&
+          spec0.model != MaterialModel::Corotational)
+        continue;
+      ElasticSystem sys(world(), build_mesh(box(2, type), *world()), spec0);
+      auto u = sys.create_vector();
+      set_displacement(sys, *u, [&](const std::array<double, 3>&, int c, long long g) { return 0.12 * hash_unit(g, c); });
+      auto f = sys.create_vector();
+      sys.evaluate(*u, f.get(), nullptr);
+      const auto fg = gather(*f);
+      const double h = 1e-6;
+      double worst = 0.0, fmax = 0.0;
+      for (GO j = 0; j < static_cast<GO>(fg.size()); ++j) {
+        const bool mine = sys.owned_dofs()->isNodeGlobalElement(j);
+        double e[2];
+        for (int s = 0; s < 2; ++s) {
+          if (mine) u->sumIntoGlobalValue(j, s == 0 ? h : -2.0 * h);
+          e[s] = sys.evaluate(*u, nullptr, nullptr).energy;
+        }
+        if (mine) u->sumIntoGlobalValue(j, h);
+        worst = std::max(worst, std::fabs((e[0] - e[1]) / (2 * h) - fg[j]));
+        fmax = std::max(fmax, std::fabs(fg[j]));
+      }
+      EXPECT_LT(worst, 1e-6 * std::max(fmax, 1.0)) << to_string(spec0.model) << " " << to_string(type);
+      if (world()->getRank() == 0 && spec0.model == MaterialModel::StableNeoHookean)
+        std::printf("[ info ] %s SNH: |force - FD(energy)|max = %.2e, |force|max = %.2e\n", to_string(type).c_str(), worst, fmax);
+    }
+  }
+}
+
+TEST(Assembly, MatrixIsJacobianOfForceAndProjectionIsPsd) {
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    for (const auto& spec0 : test::all_models(1.0, 0.45)) {
+      if (type == ElementType::Tet4 && spec0.model != MaterialModel::StableNeoHookean) continue;
+      MaterialSpec spec = spec0;
+      spec.projection = Projection::None;
+      ElasticSystem sys(world(), build_mesh(box(2, type), *world()), spec);
+      auto u = sys.create_vector();
+      set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long g) {
+        return 0.1 * hash_unit(g, c) - (c == 2 ? 0.6 * X[2] : 0.0);  // distorted and strongly compressed
+      });
+      auto K = sys.create_matrix();
+      sys.evaluate(*u, nullptr, K.get());
+      const auto D = dense(*K);
+      const std::size_t n = D.size();
+      auto fp = sys.create_vector(), fm = sys.create_vector();
+      const double h = 1e-6;
+      double worst = 0.0;
+      for (GO j = 0; j < static_cast<GO>(n); ++j) {
+        const bool mine = sys.owned_dofs()->isNodeGlobalElement(j);
+        if (mine) u->sumIntoGlobalValue(j, h);
+        sys.evaluate(*u, fp.get(), nullptr);
+        if (mine) u->sumIntoGlobalValue(j, -2 * h);
+        sys.evaluate(*u, fm.get(), nullptr);
+        if (mine) u->sumIntoGlobalValue(j, h);
+        const auto a = gather(*fp), b = gather(*fm);
+        for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, std::fabs((a[i] - b[i]) / (2 * h) - D[i][j]));
+      }
+      const double scale = max_abs(D);
+      EXPECT_LT(worst, 1e-6 * scale) << to_string(spec.model) << " " << to_string(type);
+      if (world()->getRank() == 0 && spec.model == MaterialModel::StableNeoHookean)
+        std::printf("[ info ] %s SNH: |K - FD(force)|max / |K|max = %.2e\n", to_string(type).c_str(), worst / scale);
+      // Symmetric.
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < n; ++k) ASSERT_NEAR(D[i][k], D[k][i], 1e-12 * scale);
+      // The clamped projection of the same state is PSD even where the exact matrix is not.
+      sys.set_projection(Projection::Clamp);
+      auto Kp = sys.create_matrix();
+      sys.evaluate(*u, nullptr, Kp.get());
+      const double lmin = min_eigenvalue(dense(*Kp));
+      EXPECT_GE(lmin, -1e-12 * scale) << to_string(spec.model);
+    }
+  }
+}
+
+TEST(Assembly, ClampedEqualsExactWhereNothingIsClamped) {
+  // At rest every element Hessian is PSD (its only zero eigenvalues are the rotations), so the
+  // projection must change nothing.
+  ElasticSystem sys(world(), build_mesh(box(3), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45));
+  auto u = sys.create_vector();
+  u->putScalar(0.0);
+  auto K0 = sys.create_matrix(), K1 = sys.create_matrix();
+  sys.evaluate(*u, nullptr, K0.get());
+  sys.set_projection(Projection::Clamp);
+  sys.evaluate(*u, nullptr, K1.get());
+  const auto a = dense(*K0), b = dense(*K1);
+  double d = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < a.size(); ++j) d = std::max(d, std::fabs(a[i][j] - b[i][j]));
+  EXPECT_LT(d, 1e-12 * max_abs(a));
+}
+
+TEST(Assembly, RigidBodyModesSpanRestNullSpace) {
+  ElasticSystem sys(world(), build_mesh(box(3), *world()), material());
+  auto u = sys.create_vector();
+  u->putScalar(0.0);
+  auto K = sys.create_matrix();
+  sys.evaluate(*u, nullptr, K.get());
+  auto modes = sys.rigid_body_modes();
+  MultiVector Km(sys.owned_dofs(), 6);
+  K->apply(*modes, Km);
+  std::vector<double> kn(6), mn(6);
+  Km.normInf(kn);
+  modes->normInf(mn);
+  const double knorm = K->getFrobeniusNorm();
+  for (int k = 0; k < 6; ++k) EXPECT_LT(kn[k], 1e-12 * knorm * mn[k]) << "mode " << k;
+  EXPECT_EQ(sys.coordinates()->getNumVectors(), 3u);
+}
+
+TEST(Assembly, DirichletEliminationIsSymmetric) {
+  ElasticSystem sys(world(), build_mesh(box(2), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp));
+  std::vector<int> fixed;
+  for (int n : select_nodes(sys.mesh(), face_predicate(sys.mesh(), "z-")))
+    for (int c = 0; c < 3; ++c) fixed.push_back(3 * n + c);
+  sys.set_fixed_dofs(fixed);
+  EXPECT_EQ(sys.global_fixed_dofs(), 27u);
+  auto u = sys.create_vector();
+  set_displacement(sys, *u, [&](const std::array<double, 3>&, int c, long long g) { return 0.05 * hash_unit(g, c); });
+  auto f = sys.create_vector();
+  auto K = sys.create_matrix();
+  sys.evaluate(*u, f.get(), K.get());
+  const auto D = dense(*K);
+  const auto fg = gather(*f);
+  // Global ids of fixed DOFs: nodes on z = 0 are the first 9 node ids (layer 0).
+  for (std::size_t i = 0; i < D.size(); ++i) {
+    const bool fi = i < 27;
+    if (fi) {
+      EXPECT_EQ(fg[i], 0.0);
+      EXPECT_GT(D[i][i], 0.0);
+    }
+    for (std::size_t j = 0; j < D.size(); ++j) {
+      EXPECT_NEAR(D[i][j], D[j][i], 1e-13);
+      if ((fi || j < 27) && i != j) {
+        EXPECT_EQ(D[i][j], 0.0);
+      }
+    }
+  }
+  EXPECT_GT(min_eigenvalue(D), 0.0);  // fixing a face removes the rigid modes
+}
+
+TEST(Assembly, BackendsAndRanksAgree) {
+  // Serial execution space vs the default one (OpenMP with the threads this test got), and the
+  // distributed assembly vs a one-rank assembly of the whole mesh on every rank.
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    const auto spec = material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp);
+    auto self = Teuchos::rcp(new Teuchos::MpiComm<int>(MPI_COMM_SELF));
+    ElasticSystem dist(world(), build_mesh(box(4, type), *world()), spec);
+    ElasticSystem solo(self, build_mesh(box(4, type), *self), spec);
+    auto fill = [](const ElasticSystem& s, Vector& u) {
+      set_displacement(s, u, [&](const std::array<double, 3>& X, int c, long long g) {
+        return 0.08 * hash_unit(g, c, 1) + (c == 0 ? 0.3 * X[2] * X[1] : 0.0);
+      });
+    };
+    auto ud = dist.create_vector(), us = solo.create_vector();
+    fill(dist, *ud);
+    fill(solo, *us);
+    auto fd = dist.create_vector(), fs = solo.create_vector(), fser = dist.create_vector();
+    auto Kd = dist.create_matrix(), Ks = solo.create_matrix(), Kser = dist.create_matrix();
+    const auto td = dist.evaluate(*ud, fd.get(), Kd.get());
+    const auto ts = solo.evaluate(*us, fs.get(), Ks.get());
+    const auto tser = dist.evaluate(*ud, fser.get(), Kser.get(), Backend::Serial);
+    const double e_scale = std::max(1.0, std::fabs(ts.energy));
+    EXPECT_NEAR(td.energy, ts.energy, 1e-12 * e_scale);
+    EXPECT_NEAR(tser.energy, ts.energy, 1e-12 * e_scale);
+    EXPECT_NEAR(td.volume, ts.volume, 1e-12);
+    EXPECT_EQ(td.min_J, ts.min_J);
+    const auto a = gather(*fd), b = gather(*fs), c = gather(*fser);
+    double fmax = 0.0, dab = 0.0, dcb = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      fmax = std::max(fmax, std::fabs(b[i]));
+      dab = std::max(dab, std::fabs(a[i] - b[i]));
+      dcb = std::max(dcb, std::fabs(c[i] - b[i]));
+    }
+    EXPECT_LT(dab, 1e-12 * fmax);
+    EXPECT_LT(dcb, 1e-12 * fmax);
+    const double kd = Kd->getFrobeniusNorm(), ks = Ks->getFrobeniusNorm(), kser = Kser->getFrobeniusNorm();
+    EXPECT_NEAR(kd, ks, 1e-12 * ks);
+    EXPECT_NEAR(kser, ks, 1e-12 * ks);
+    // Entry by entry through a product with a deterministic vector.
+    auto x = dist.create_vector(), xs = solo.create_vector();
+    fill(dist, *x);
+    fill(solo, *xs);
+    auto yd = dist.create_vector(), ys = solo.create_vector();
+    Kd->apply(*x, *yd);
+    Ks->apply(*xs, *ys);
+    const auto p = gather(*yd), q = gather(*ys);
+    double dy = 0.0, ymax = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      dy = std::max(dy, std::fabs(p[i] - q[i]));
+      ymax = std::max(ymax, std::fabs(q[i]));
+    }
+    EXPECT_LT(dy, 1e-12 * ymax);
+  }
+}
