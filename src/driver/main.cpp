@@ -2,6 +2,7 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/driver/config.hpp>
 #include <sinew/driver/info.hpp>
+#include <sinew/driver/run.hpp>
 
 #include <Tpetra_Core.hpp>
 
@@ -20,8 +21,11 @@ const char* kUsage =
     "options:\n"
     "  --version, --info      print versions, Kokkos backends, threads, MPI ranks, HDF5, and exit\n"
     "  --check                read and validate SCENE.xml, print the configuration, and exit\n"
+    "  --quiet                no progress lines\n"
     "  --kokkos-threads=N     OpenMP threads per rank (or set OMP_NUM_THREADS)\n"
-    "  -h, --help             this text\n";
+    "  -h, --help             this text\n"
+    "\n"
+    "exit codes: 0 done, 1 error, 2 bad command line, 3 bad input, 4 a step did not converge\n";
 
 int rank_of_world() {
   int r = 0;
@@ -39,13 +43,15 @@ int main(int argc, char** argv) {
   Tpetra::ScopeGuard scope(&argc, &argv);
   const bool root = rank_of_world() == 0;
   std::string scene_path;
-  bool info = false, check = false;
+  bool info = false, check = false, quiet = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--version" || a == "--info") {
       info = true;
     } else if (a == "--check") {
       check = true;
+    } else if (a == "--quiet") {
+      quiet = true;
     } else if (a == "-h" || a == "--help") {
       if (root) std::cout << kUsage;
       return 0;
@@ -69,11 +75,11 @@ int main(int argc, char** argv) {
   }
   try {
     const sinew::SceneConfig scene = sinew::read_scene(scene_path);
-    if (root) {
-      std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
-      if (!check)
-        std::cout << "note: this build reads and validates scenes; the quasi-static solver is not in it yet.\n";
+    if (check) {
+      if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
+      return 0;
     }
+    return sinew::run_scene(scene, sinew::RunOptions{quiet});
   } catch (const sinew::InputError& e) {
     if (root) std::cerr << "sinew: input error: " << e.what() << "\n";
     return 3;

@@ -1,0 +1,422 @@
+// NOX + Thyra + Stratimikos + Belos + MueLu: the only translation unit that includes them.
+#include <sinew/core/errors.hpp>
+#include <sinew/core/validation.hpp>
+#include <sinew/solver/nonlinear_solver.hpp>
+
+#include <NOX.H>
+#include <NOX_MeritFunction_Generic.H>
+#include <NOX_Observer.hpp>
+#include <NOX_SolverStats.hpp>
+#include <NOX_Solver_LineSearchBased.H>
+#include <NOX_Thyra.H>
+#include <NOX_Thyra_Group.H>
+#include <NOX_Thyra_Vector.H>
+#include <Stratimikos_DefaultLinearSolverBuilder.hpp>
+#include <Stratimikos_MueLuHelpers.hpp>
+#include <Teuchos_TimeMonitor.hpp>
+#include <Thyra_LinearOpWithSolveFactoryHelpers.hpp>
+#include <Thyra_StateFuncModelEvaluatorBase.hpp>
+#include <Thyra_TpetraThyraWrappers.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Vector.hpp>
+
+#include <chrono>
+#include <map>
+#include <cmath>
+
+namespace sinew {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+using Extract = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, NodeType>;
+
+// ---------------------------------------------------------------------------------------------
+// The model: x = nodal displacements (Dirichlet entries prescribed), f = dE/du (zero in Dirichlet
+// rows), W = the (projected) stiffness with Dirichlet rows and columns eliminated.
+// ---------------------------------------------------------------------------------------------
+class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
+ public:
+  explicit ElasticModel(ElasticSystem& sys) : sys_(sys) {
+    space_ = Thyra::createVectorSpace<double, LO, GO, NodeType>(sys.owned_dofs());
+    x0_ = Thyra::createMember(space_);
+    Thyra::V_S(x0_.ptr(), 0.0);
+    Thyra::ModelEvaluatorBase::InArgsSetup<double> in;
+    in.setModelEvalDescription("sinew elastic model");
+    in.setSupports(Thyra::ModelEvaluatorBase::IN_ARG_x);
+    in_ = in;
+    Thyra::ModelEvaluatorBase::OutArgsSetup<double> out;
+    out.setModelEvalDescription("sinew elastic model");
+    out.setSupports(Thyra::ModelEvaluatorBase::OUT_ARG_f);
+    out.setSupports(Thyra::ModelEvaluatorBase::OUT_ARG_W_op);
+    out_ = out;
+    nominal_ = in_;
+    nominal_.set_x(x0_);
+  }
+
+  void set_W_factory(const Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>>& f) { factory_ = f; }
+
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_x_space() const override { return space_; }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_f_space() const override { return space_; }
+  Thyra::ModelEvaluatorBase::InArgs<double> getNominalValues() const override { return nominal_; }
+  Thyra::ModelEvaluatorBase::InArgs<double> createInArgs() const override { return in_; }
+  Teuchos::RCP<Thyra::LinearOpBase<double>> create_W_op() const override {
+    return Thyra::tpetraLinearOp<double, LO, GO, NodeType>(space_, space_, sys_.create_matrix());
+  }
+  Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> get_W_factory() const override { return factory_; }
+
+  double energy(const Thyra::VectorBase<double>& x) const {
+    const auto t0 = Clock::now();
+    const double e = sys_.evaluate(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(x)), nullptr, nullptr).energy;
+    seconds_assembly += since(t0);
+    return e;
+  }
+
+  mutable double seconds_assembly = 0.0;
+  mutable EvaluationTotals last;
+
+ private:
+  Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override { return out_; }
+
+  void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
+                     const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override {
+    const auto t0 = Clock::now();
+    auto u = Extract::getConstTpetraVector(in.get_x());
+    Teuchos::RCP<Vector> f;
+    Teuchos::RCP<CrsMatrix> W;
+    if (Teuchos::nonnull(out.get_f())) f = Extract::getTpetraVector(out.get_f());
+    if (Teuchos::nonnull(out.get_W_op()))
+      W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
+    last = sys_.evaluate(*u, f.get(), W.get());
+    seconds_assembly += since(t0);
+  }
+
+  ElasticSystem& sys_;
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
+  Teuchos::RCP<Thyra::VectorBase<double>> x0_;
+  Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> factory_;
+  Thyra::ModelEvaluatorBase::InArgs<double> in_, nominal_;
+  Thyra::ModelEvaluatorBase::OutArgs<double> out_;
+};
+
+// Total energy as the line search's merit function: the PSD-projected Newton direction is a descent
+// direction for the energy, which is not always true for ||F||^2.
+class EnergyMerit : public NOX::MeritFunction::Generic {
+ public:
+  explicit EnergyMerit(const ElasticModel& model) : model_(model) {}
+  double computef(const NOX::Abstract::Group& grp) const override {
+    const auto& x = dynamic_cast<const NOX::Thyra::Vector&>(grp.getX());
+    const double e = model_.energy(x.getThyraVector());
+    return std::isfinite(e) ? e : HUGE_VAL;  // +inf (e.g. Neo-Hookean inverted) is rejected, never NaN
+  }
+  void computeGradient(const NOX::Abstract::Group& grp, NOX::Abstract::Vector& result) const override {
+    result = grp.getF();
+  }
+  double computeSlope(const NOX::Abstract::Vector& dir, const NOX::Abstract::Group& grp) const override {
+    return grp.getF().innerProduct(dir);
+  }
+  double computeQuadraticModel(const NOX::Abstract::Vector& dir, const NOX::Abstract::Group& grp) const override {
+    Teuchos::RCP<NOX::Abstract::Vector> Jd = dir.clone(NOX::ShapeCopy);
+    grp.applyJacobian(dir, *Jd);
+    return computef(grp) + computeSlope(dir, grp) + 0.5 * dir.innerProduct(*Jd);
+  }
+  void computeQuadraticMinimizer(const NOX::Abstract::Group&, NOX::Abstract::Vector&) const override {
+    throw std::logic_error("EnergyMerit: quadratic minimizer not provided (use a line-search method)");
+  }
+  const std::string& name() const override { return name_; }
+
+ private:
+  const ElasticModel& model_;
+  std::string name_ = "Sinew total energy";
+};
+
+class ProgressObserver : public NOX::Observer {
+ public:
+  ProgressObserver(std::function<void(const NewtonIterate&)> cb, SolveReport& report, const ElasticModel& model)
+      : cb_(std::move(cb)), report_(report), model_(model) {}
+  void runPreLineSearch(const NOX::Solver::Generic&) override {
+    t_ls_ = Clock::now();
+    asm_before_ls_ = model_.seconds_assembly;
+  }
+  void runPostLineSearch(const NOX::Solver::Generic&) override {
+    // Line-search time net of the energy and residual evaluations it triggers (counted as assembly).
+    line_search_ += since(t_ls_) - (model_.seconds_assembly - asm_before_ls_);
+  }
+  void runPostIterate(const NOX::Solver::Generic& solver) override {
+    NewtonIterate it;
+    it.iteration = solver.getNumIterations();
+    it.residual = solver.getSolutionGroup().getNormF();
+    if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
+    if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
+    if (cb_) cb_(it);
+  }
+  double line_search_ = 0.0;
+
+ private:
+  std::function<void(const NewtonIterate&)> cb_;
+  SolveReport& report_;
+  const ElasticModel& model_;
+  Clock::time_point t_ls_;
+  double asm_before_ls_ = 0.0;
+};
+
+// MueLu smoothed aggregation for 3D elasticity (after packages/muelu/test/scaling/elasticity3D.xml).
+// KLU2 solves wrongly on a matrix spread over several ranks in our Trilinos build, so the coarse levels
+// are repartitioned onto one rank (Zoltan2, with the coordinates) before KLU2 sees them.
+Teuchos::ParameterList default_muelu() {
+  Teuchos::ParameterList m;
+  m.set("verbosity", "none");
+  m.set("number of equations", 3);
+  m.set("multigrid algorithm", "sa");
+  m.set("problem: symmetric", true);
+  m.set("max levels", 10);
+  m.set("coarse: max size", 1500);
+  m.set("aggregation: type", "uncoupled");
+  m.set("aggregation: drop tol", 0.0);
+  m.set("transpose: use implicit", true);
+  m.set("smoother: type", "CHEBYSHEV");
+  m.sublist("smoother: params").set("chebyshev: degree", 2);
+  m.sublist("smoother: params").set("chebyshev: ratio eigenvalue", 7.0);
+  m.sublist("smoother: params").set("chebyshev: min eigenvalue", 1.0);
+  m.sublist("smoother: params").set("chebyshev: zero starting solution", true);
+  m.set("coarse: type", "Klu2");
+  m.set("repartition: enable", true);
+  m.set("repartition: partitioner", "zoltan2");
+  m.set("repartition: start level", 1);
+  m.set("repartition: min rows per proc", 5000);
+  m.set("repartition: max imbalance", 1.327);
+  m.sublist("repartition: params").set("algorithm", "multijagged");
+  m.set("use kokkos refactor", false);
+  m.set("reuse: type", "none");
+  return m;
+}
+
+Teuchos::ParameterList default_stratimikos() {
+  Teuchos::ParameterList p("Stratimikos");
+  p.set("Linear Solver Type", "Belos");
+  auto& belos = p.sublist("Linear Solver Types").sublist("Belos");
+  belos.set("Solver Type", "Pseudo Block CG");
+  auto& cg = belos.sublist("Solver Types").sublist("Pseudo Block CG");
+  cg.set("Maximum Iterations", 2000);
+  cg.set("Convergence Tolerance", 1e-6);
+  // Projected element Hessians make the matrix PSD, and exactly singular directions can appear in
+  // degenerate states: let CG report rather than throw on zero curvature.
+  cg.set("Assert Positive Definiteness", false);
+  belos.sublist("VerboseObject").set("Verbosity Level", "none");
+  p.set("Preconditioner Type", "MueLu");
+  p.sublist("Preconditioner Types").sublist("MueLu") = default_muelu();
+  return p;
+}
+
+// NOX defaults before the user's "NOX" sublist is laid over them.
+Teuchos::ParameterList default_nox(int rank) {
+  Teuchos::ParameterList n("NOX");
+  n.set("Nonlinear Solver", "Line Search Based");
+  n.sublist("Direction").set("Method", "Newton");
+  auto& newton = n.sublist("Direction").sublist("Newton");
+  newton.set("Forcing Term Method", "Constant");
+  newton.sublist("Linear Solver").set("Tolerance", 1e-4);
+  newton.set("Rescue Bad Newton Solve", true);
+  n.sublist("Line Search").set("Method", "Backtrack");
+  auto& bt = n.sublist("Line Search").sublist("Backtrack");
+  bt.set("Max Iters", 40);
+  bt.set("Minimum Step", 1e-12);
+  bt.set("Default Step", 1.0);
+  bt.set("Recovery Step", 0.0);  // a failed line search fails the step (and the step is cut)
+  bt.set("Reduction Factor", 0.5);
+  n.sublist("Printing").set("MyPID", rank);
+  n.sublist("Printing").set("Output Precision", 6);
+  n.sublist("Printing").set("Output Processor", 0);
+  n.sublist("Printing").set("Output Information", NOX::Utils::Error);
+  n.sublist("Solver Options").set("Status Test Check Type", "Minimal");
+  return n;
+}
+
+// dst <- defaults with every entry of src laid over them (recursively for sublists).
+void overlay(Teuchos::ParameterList& dst, const Teuchos::ParameterList& src) {
+  for (auto it = src.begin(); it != src.end(); ++it) {
+    const std::string& k = src.name(it);
+    if (src.isSublist(k))
+      overlay(dst.sublist(k), src.sublist(k));
+    else
+      dst.setEntry(k, src.entry(it));
+  }
+}
+
+}  // namespace
+
+Teuchos::ParameterList valid_solver_parameters() {
+  Teuchos::ParameterList v("Solver");
+  v.set("Absolute tolerance", 1e-2, "converged when the L2 norm of the force residual is below this (the paper's test)");
+  v.set("Relative tolerance", 0.0, "also converged when the residual norm falls below this times the step's first (0: off)");
+  v.set("Maximum iterations", 50, "Newton iterations per load step");
+  v.set("Line search", std::string("backtrack"), "backtrack | polynomial | more-thuente | full-step");
+  v.set("Line search merit", std::string("energy"), "energy (total elastic energy) | residual (0.5 |F|^2)");
+  v.set("Linear tolerance", 1e-4, "relative CG tolerance of each Newton step (Constant forcing term)");
+  v.set("Forcing term", std::string("constant"), "constant | type 1 | type 2 (Eisenstat-Walker)");
+  v.set("Preconditioner", std::string("muelu"), "muelu | none");
+  v.set("Verbose", false, "print NOX's own iteration output");
+  v.sublist("NOX", false, "raw NOX parameters laid over Sinew's defaults");
+  v.sublist("Stratimikos", false, "raw Stratimikos (Belos, MueLu) parameters laid over Sinew's defaults");
+  return v;
+}
+
+struct NonlinearSolver::Impl {
+  ElasticSystem& sys;
+  Teuchos::RCP<ElasticModel> model;
+  Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> lowsf;
+  Teuchos::RCP<Thyra::LinearOpBase<double>> W;
+  Teuchos::ParameterList nox_defaults;
+  double abs_tol = 1e-2, rel_tol = 0.0;
+  int max_iters = 50;
+  bool energy_merit = true;
+  double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
+
+  Impl(ElasticSystem& s, const Teuchos::ParameterList& in) : sys(s) {
+    const Teuchos::ParameterList valid = valid_solver_parameters();
+    require_known_entries(in, valid, "Solver");
+    abs_tol = get_or<double>(in, "Absolute tolerance", 1e-2);
+    rel_tol = get_or<double>(in, "Relative tolerance", 0.0);
+    max_iters = get_or<int>(in, "Maximum iterations", 50);
+    if (!(abs_tol > 0.0)) throw InputError("Solver: 'Absolute tolerance' must be positive");
+    if (!(rel_tol >= 0.0 && rel_tol < 1.0)) throw InputError("Solver: 'Relative tolerance' must lie in [0, 1)");
+    if (max_iters < 1) throw InputError("Solver: 'Maximum iterations' must be at least 1");
+    const std::string merit = get_or<std::string>(in, "Line search merit", "energy");
+    if (merit != "energy" && merit != "residual")
+      throw InputError("Solver: 'Line search merit' must be energy or residual, got \"" + merit + "\"");
+    energy_merit = merit == "energy";
+
+    nox_defaults = default_nox(s.comm()->getRank());
+    const std::string ls = get_or<std::string>(in, "Line search", "backtrack");
+    const std::map<std::string, std::string> ls_names = {
+        {"backtrack", "Backtrack"}, {"polynomial", "Polynomial"}, {"more-thuente", "More'-Thuente"}, {"full-step", "Full Step"}};
+    if (!ls_names.count(ls))
+      throw InputError("Solver: 'Line search' must be backtrack, polynomial, more-thuente or full-step; got \"" + ls + "\"");
+    nox_defaults.sublist("Line Search").set("Method", ls_names.at(ls));
+    nox_defaults.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
+    nox_defaults.sublist("Line Search").sublist("More'-Thuente").set("Recovery Step", 0.0);
+    const std::string forcing = get_or<std::string>(in, "Forcing term", "constant");
+    const std::map<std::string, std::string> f_names = {{"constant", "Constant"}, {"type 1", "Type 1"}, {"type 2", "Type 2"}};
+    if (!f_names.count(forcing))
+      throw InputError("Solver: 'Forcing term' must be constant, type 1 or type 2; got \"" + forcing + "\"");
+    auto& newton = nox_defaults.sublist("Direction").sublist("Newton");
+    newton.set("Forcing Term Method", f_names.at(forcing));
+    const double lin_tol = get_or<double>(in, "Linear tolerance", 1e-4);
+    if (!(lin_tol > 0.0 && lin_tol < 1.0)) throw InputError("Solver: 'Linear tolerance' must lie in (0, 1)");
+    newton.sublist("Linear Solver").set("Tolerance", lin_tol);
+    if (get_or<bool>(in, "Verbose", false))
+      nox_defaults.sublist("Printing").set("Output Information", NOX::Utils::Error + NOX::Utils::Warning +
+                                                                     NOX::Utils::OuterIteration + NOX::Utils::Parameters);
+    if (in.isSublist("NOX")) overlay(nox_defaults, in.sublist("NOX"));
+
+    auto strat = Teuchos::rcp(new Teuchos::ParameterList(default_stratimikos()));
+    const std::string prec = get_or<std::string>(in, "Preconditioner", "muelu");
+    if (prec == "none")
+      strat->set("Preconditioner Type", "None");
+    else if (prec != "muelu")
+      throw InputError("Solver: 'Preconditioner' must be muelu or none; got \"" + prec + "\"");
+    if (in.isSublist("Stratimikos")) overlay(*strat, in.sublist("Stratimikos"));
+    if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
+      auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
+      mlist.set("Coordinates", s.coordinates());
+      mlist.set("Nullspace", s.rigid_body_modes());
+    }
+
+    model = Teuchos::rcp(new ElasticModel(s));
+    Stratimikos::DefaultLinearSolverBuilder builder;
+    Stratimikos::enableMueLu<LO, GO, NodeType>(builder);
+    try {
+      builder.setParameterList(strat);
+      lowsf = builder.createLinearSolveStrategy("");
+    } catch (const std::exception& e) {
+      throw InputError(std::string("Solver: invalid Stratimikos/Belos/MueLu parameters: ") + e.what());
+    }
+    model->set_W_factory(lowsf);
+    W = model->create_W_op();
+  }
+};
+
+NonlinearSolver::NonlinearSolver(ElasticSystem& system, const Teuchos::ParameterList& params)
+    : impl_(std::make_unique<Impl>(system, params)) {}
+NonlinearSolver::~NonlinearSolver() = default;
+
+double NonlinearSolver::absolute_tolerance() const { return impl_->abs_tol; }
+
+SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
+  SolveReport report;
+  Impl& m = *impl_;
+  const auto t0 = Clock::now();
+  m.model->seconds_assembly = 0.0;
+  auto x = Thyra::createVector(Teuchos::rcpFromRef(u), Thyra::createVectorSpace<double, LO, GO, NodeType>(u.getMap()));
+  NOX::Thyra::Vector x0(x);
+
+  auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox_defaults));
+  auto observer = Teuchos::rcp(new ProgressObserver(progress, report, *m.model));
+  params->sublist("Solver Options").set<Teuchos::RCP<NOX::Observer>>("Observer", observer);
+  if (m.energy_merit)
+    params->sublist("Solver Options")
+        .set<Teuchos::RCP<NOX::MeritFunction::Generic>>("User Defined Merit Function", Teuchos::rcp(new EnergyMerit(*m.model)));
+
+  try {
+    auto group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
+    group->computeF();
+    report.initial_residual = group->getNormF();
+    auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
+    auto converged = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
+    // Unscaled: the plain L2 norm of the force residual, as the paper's criterion (NOX scales by
+    // 1/sqrt(n) unless told otherwise).
+    converged->addStatusTest(Teuchos::rcp(
+        new NOX::StatusTest::NormF(m.abs_tol, NOX::Abstract::Vector::TwoNorm, NOX::StatusTest::NormF::Unscaled)));
+    if (m.rel_tol > 0.0)
+      converged->addStatusTest(Teuchos::rcp(new NOX::StatusTest::NormF(*group, m.rel_tol, NOX::Abstract::Vector::TwoNorm,
+                                                                       NOX::StatusTest::NormF::Unscaled)));
+    auto maxiters = Teuchos::rcp(new NOX::StatusTest::MaxIters(m.max_iters));
+    auto tests = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
+    tests->addStatusTest(finite);
+    tests->addStatusTest(converged);
+    tests->addStatusTest(maxiters);
+
+    auto solver = NOX::Solver::buildSolver(group, tests, params);
+    const NOX::StatusTest::StatusType status = solver->solve();
+    report.newton_iterations = solver->getNumIterations();
+    if (auto stats = solver->getSolverStatistics())
+      report.linear_iterations = stats->linearSolve.lastNonlinearSolve_NumLinearIterations;
+    const auto& final_group = dynamic_cast<const NOX::Thyra::Group&>(solver->getSolutionGroup());
+    report.final_residual = final_group.getNormF();
+    report.converged = status == NOX::StatusTest::Converged;
+    if (!report.converged) {
+      if (finite->getStatus() == NOX::StatusTest::Failed)
+        report.reason = "non-finite residual (NaN or Inf)";
+      else if (maxiters->getStatus() == NOX::StatusTest::Failed)
+        report.reason = "no convergence in " + std::to_string(m.max_iters) + " Newton iterations";
+      else
+        report.reason = "line search failed to decrease the " + std::string(m.energy_merit ? "energy" : "residual");
+    }
+    // Copy the solution back (the Thyra vector wraps u, but NOX keeps its own copies).
+    const auto& xs = dynamic_cast<const NOX::Thyra::Vector&>(final_group.getX());
+    u.assign(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(xs.getThyraVector())));
+  } catch (const std::exception& e) {
+    report.converged = false;
+    std::string what = e.what();
+    if (what.size() > 600) what = what.substr(0, 600) + "...";
+    report.reason = "solver exception: " + what;
+  }
+  report.seconds_total = since(t0);
+  report.seconds_assembly = m.model->seconds_assembly;
+  report.seconds_line_search = observer->line_search_;
+  // Preconditioner setup and linear solve from NOX's own timers (cumulative: take differences).
+  auto total = [](const char* name) {
+    auto t = Teuchos::TimeMonitor::lookupCounter(name);
+    return t.is_null() ? 0.0 : t->totalElapsedTime();
+  };
+  const double prec_now = total("NOX Total Preconditioner Construction"), lin_now = total("NOX Total Linear Solve");
+  report.seconds_preconditioner = prec_now - m.prec_seen;
+  report.seconds_linear = lin_now - m.linear_seen;
+  m.prec_seen = prec_now;
+  m.linear_seen = lin_now;
+  return report;
+}
+
+}  // namespace sinew
