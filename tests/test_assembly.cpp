@@ -2,6 +2,7 @@
 // differences, rigid motions, volumes, Dirichlet elimination, and agreement between backends and ranks.
 // Runs as is on 1 rank (unit), with 2 OpenMP threads, and on 2 MPI ranks.
 #include "material_test_utils.hpp"
+#include "tpetra_test_utils.hpp"
 
 #include <sinew/algebra/elastic_system.hpp>
 #include <sinew/core/errors.hpp>
@@ -16,6 +17,7 @@
 #include <map>
 
 using namespace sinew;
+using sinew::test::gather;
 
 namespace {
 
@@ -35,17 +37,6 @@ MeshSpec box(int n, ElementType t = ElementType::Hex8, int nz = -1) {
   s.lower = {0.0, 0.0, 0.0};
   s.upper = {1.0, 0.8, 1.2};
   return s;
-}
-
-// Whole vector on every rank, indexed by global id.
-std::vector<double> gather(const Vector& v) {
-  auto map = v.getMap();
-  auto all = Tpetra::createLocalMapWithNode<LO, GO, NodeType>(map->getGlobalNumElements(), map->getComm());
-  Vector full(all);
-  Import imp(map, all);
-  full.doImport(v, imp, Tpetra::INSERT);
-  auto h = full.getLocalViewHost(Tpetra::Access::ReadOnly);
-  return std::vector<double>(h.data(), h.data() + h.extent(0));
 }
 
 // Sets u from a function of the reference position and component, on owned DOFs.

@@ -41,11 +41,18 @@ SceneConfig read_scene(const std::string& path) {
     if (nl != std::string::npos && nl + 1 < what.size()) what = what.substr(nl + 1);
     throw InputError(path + ": malformed XML parameter list: " + what);
   }
+  return make_scene(scene.params, path);
+}
+
+SceneConfig make_scene(Teuchos::RCP<Teuchos::ParameterList> params, const std::string& name) {
+  SceneConfig scene;
+  scene.file = name;
+  scene.params = params;
   try {
     require_known_entries(*scene.params, valid_top_level(), "the top-level list");
     scene.material = material_from_parameters(scene.params->sublist("Material"));
   } catch (const InputError& e) {
-    throw InputError(path + ": " + e.what());
+    throw InputError(name + ": " + e.what());
   }
   return scene;
 }

@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 namespace sinew {
@@ -24,100 +25,119 @@ const Teuchos::ParameterList& sublist_or_empty(const Teuchos::ParameterList& p, 
 }
 }  // namespace
 
-int run_scene(const SceneConfig& config, const RunOptions& opt) {
-  auto comm = Tpetra::getDefaultComm();
+Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teuchos::RCP<const Teuchos::Comm<int>> comm)
+    : config_(config), opt_(options) {
+  if (comm.is_null()) comm = Tpetra::getDefaultComm();
+  scene_ = std::make_unique<Scene>(config_, comm);
+  solver_ = std::make_unique<NonlinearSolver>(scene_->system(), sublist_or_empty(*config_.params, "Solver"));
+  out_ = std::make_unique<Output>(sublist_or_empty(*config_.params, "Output"), *scene_, config_.file);
+  u_ = scene_->system().create_vector();
+}
+
+Simulation::~Simulation() = default;
+
+int Simulation::run() {
+  ElasticSystem& sys = scene_->system();
+  Scene& scene = *scene_;
+  Output& out = *out_;
+  NonlinearSolver& solver = *solver_;
+  Vector& u = *u_;
+  auto comm = sys.comm();
   const bool root = comm->getRank() == 0;
-  const bool talk = root && !opt.quiet;
+  const bool talk = root && !opt_.quiet;
   const auto t_start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count(); };
-  try {
-    Scene scene(config, comm);
-    ElasticSystem& sys = scene.system();
-    NonlinearSolver solver(sys, sublist_or_empty(*config.params, "Solver"));
-    Output out(sublist_or_empty(*config.params, "Output"), scene, config.file);
-    if (talk) {
-      std::printf("Sinew: scene '%s' (%s), %s, %d MPI rank%s\n", scene.name().c_str(), config.file.c_str(),
-                  execution_space_summary().c_str(), comm->getSize(), comm->getSize() > 1 ? "s" : "");
-      std::printf("  mesh: %lld %s elements, %lld nodes, %lld DOFs (%zu prescribed)\n",
-                  static_cast<long long>(sys.mesh().global_elements), to_string(sys.mesh().type).c_str(),
-                  static_cast<long long>(sys.mesh().global_nodes), 3LL * sys.mesh().global_nodes, sys.global_fixed_dofs());
-      std::printf("  material: %s\n", describe(config.material).c_str());
-      std::printf("  %d load step%s; converged when |F| < %g; results in %s\n", scene.steps(), scene.steps() > 1 ? "s" : "",
-                  solver.absolute_tolerance(), out.directory().c_str());
-      std::fflush(stdout);
-    }
-    out.write_mesh();
-    auto u = sys.create_vector();
-    scene.initial_state(*u);
-    const double V0 = sys.reference_volume();
-    out.write_step(0, 0.0, *u);
+  const std::size_t prescribed = sys.global_fixed_dofs();  // collective: outside the rank-0 block
+  if (talk) {
+    std::printf("Sinew: scene '%s' (%s), %s, %d MPI rank%s\n", scene.name().c_str(), config_.file.c_str(),
+                execution_space_summary().c_str(), comm->getSize(), comm->getSize() > 1 ? "s" : "");
+    std::printf("  mesh: %lld %s elements, %lld nodes, %lld DOFs (%zu prescribed)\n",
+                static_cast<long long>(sys.mesh().global_elements), to_string(sys.mesh().type).c_str(),
+                static_cast<long long>(sys.mesh().global_nodes), 3LL * sys.mesh().global_nodes, prescribed);
+    std::printf("  material: %s\n", describe(config_.material).c_str());
+    std::printf("  %d load step%s; converged when |F| < %g; results in %s\n", scene.steps(), scene.steps() > 1 ? "s" : "",
+                solver.absolute_tolerance(), out.directory().c_str());
+    std::fflush(stdout);
+  }
+  out.write_mesh();
+  scene.initial_state(u);
+  const double V0 = sys.reference_volume();
+  out.write_step(0, 0.0, u);
 
-    auto trial = sys.create_vector();
-    double t_done = 0.0;
-    const int n = scene.steps();
-    for (int k = 1; k <= n; ++k) {
-      const double target = static_cast<double>(k) / n;
-      double dt = target - t_done;
-      StepRecord rec;
-      rec.step = k;
-      rec.load = target;
-      while (t_done < target - 1e-14) {
-        const double t = std::min(t_done + dt, target);
-        trial->assign(*u);
-        scene.apply_load(t, *trial);
-        if (talk) {
-          std::printf("step %d/%d  load %.4g%s\n", k, n, t, rec.cuts ? "  (after cutting the increment)" : "");
-          std::fflush(stdout);
-        }
-        auto progress = [&](const NewtonIterate& it) {
-          if (!talk) return;
-          std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g\n", it.iteration, it.residual, it.linear_iterations, it.step);
-          std::fflush(stdout);
-        };
-        const SolveReport r = solver.solve(*trial, progress);
-        rec.solve.newton_iterations += r.newton_iterations;
-        rec.solve.linear_iterations += r.linear_iterations;
-        rec.solve.seconds_assembly += r.seconds_assembly;
-        rec.solve.seconds_preconditioner += r.seconds_preconditioner;
-        rec.solve.seconds_linear += r.seconds_linear;
-        rec.solve.seconds_line_search += r.seconds_line_search;
-        rec.solve.seconds_total += r.seconds_total;
-        if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
-        rec.solve.final_residual = r.final_residual;
-        if (r.converged) {
-          u->assign(*trial);
-          t_done = t;
-          continue;
-        }
-        if (talk) std::printf("  step did not converge: %s\n", r.reason.c_str());
-        if (rec.cuts >= scene.max_cuts()) {
-          if (root)
-            std::fprintf(stderr,
-                         "sinew: step %d did not converge after %d cut%s of the load increment (%s); the last converged "
-                         "state (load %.6g) is in %s\n",
-                         k, rec.cuts, rec.cuts == 1 ? "" : "s", r.reason.c_str(), t_done, out.directory().c_str());
-          out.write_step(k, t_done, *u);
-          return kNoConvergence;
-        }
-        ++rec.cuts;
-        dt *= 0.5;
-      }
-      rec.totals = sys.evaluate(*u, nullptr, nullptr);
-      rec.volume_ratio = rec.totals.volume / V0;
-      out.log(rec);
-      if (k % out.every() == 0 || k == n) out.write_step(k, target, *u);
+  auto trial = sys.create_vector();
+  double t_done = 0.0;
+  const int n = scene.steps();
+  for (int k = 1; k <= n; ++k) {
+    const double target = static_cast<double>(k) / n;
+    double dt = target - t_done;
+    StepRecord rec;
+    rec.step = k;
+    rec.load = target;
+    while (t_done < target - 1e-14) {
+      const double t = std::min(t_done + dt, target);
+      trial->assign(u);
+      scene.apply_load(t, *trial);
       if (talk) {
-        std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
-                    "%.2f s (assembly %.2f, preconditioner %.2f, CG %.2f, line search %.2f)\n",
-                    rec.solve.newton_iterations, rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0),
-                    rec.totals.min_J, rec.totals.inverted, rec.solve.seconds_total, rec.solve.seconds_assembly,
-                    rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search);
+        std::printf("step %d/%d  load %.4g%s\n", k, n, t, rec.cuts ? "  (after cutting the increment)" : "");
         std::fflush(stdout);
       }
+      auto progress = [&](const NewtonIterate& it) {
+        if (!talk) return;
+        std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g\n", it.iteration, it.residual, it.linear_iterations, it.step);
+        std::fflush(stdout);
+      };
+      const SolveReport r = solver.solve(*trial, progress);
+      rec.solve.newton_iterations += r.newton_iterations;
+      rec.solve.linear_iterations += r.linear_iterations;
+      rec.solve.seconds_assembly += r.seconds_assembly;
+      rec.solve.seconds_preconditioner += r.seconds_preconditioner;
+      rec.solve.seconds_linear += r.seconds_linear;
+      rec.solve.seconds_line_search += r.seconds_line_search;
+      rec.solve.seconds_total += r.seconds_total;
+      if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
+      rec.solve.final_residual = r.final_residual;
+      if (r.converged) {
+        u.assign(*trial);
+        t_done = t;
+        continue;
+      }
+      if (talk) std::printf("  step did not converge: %s\n", r.reason.c_str());
+      if (rec.cuts >= scene.max_cuts()) {
+        if (root)
+          std::fprintf(stderr,
+                       "sinew: step %d did not converge after %d cut%s of the load increment (%s); the last converged "
+                       "state (load %.6g) is in %s\n",
+                       k, rec.cuts, rec.cuts == 1 ? "" : "s", r.reason.c_str(), t_done, out.directory().c_str());
+        out.write_step(k, t_done, u);
+        return kNoConvergence;
+      }
+      ++rec.cuts;
+      dt *= 0.5;
     }
-    if (talk) std::printf("done in %.1f s; results in %s\n", elapsed(), out.directory().c_str());
-    if (std::getenv("SINEW_TIMERS")) Teuchos::TimeMonitor::summarize();
-    return kSuccess;
+    rec.totals = sys.evaluate(u, nullptr, nullptr);
+    rec.volume_ratio = rec.totals.volume / V0;
+    out.log(rec);
+    records_.push_back(rec);
+    if (k % out.every() == 0 || k == n) out.write_step(k, target, u);
+    if (talk) {
+      std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
+                  "%.2f s (assembly %.2f, preconditioner %.2f, CG %.2f, line search %.2f)\n",
+                  rec.solve.newton_iterations, rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0),
+                  rec.totals.min_J, rec.totals.inverted, rec.solve.seconds_total, rec.solve.seconds_assembly,
+                  rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search);
+      std::fflush(stdout);
+    }
+  }
+  if (talk) std::printf("done in %.1f s; results in %s\n", elapsed(), out.directory().c_str());
+  if (std::getenv("SINEW_TIMERS")) Teuchos::TimeMonitor::summarize();
+  return kSuccess;
+}
+
+int run_scene(const SceneConfig& config, const RunOptions& opt) {
+  const bool root = Tpetra::getDefaultComm()->getRank() == 0;
+  try {
+    Simulation sim(config, opt);
+    return sim.run();
   } catch (const InputError& e) {
     if (root) std::fprintf(stderr, "sinew: input error: %s\n", e.what());
     return kInputError;

@@ -4,6 +4,8 @@
 #include <sinew/solver/nonlinear_solver.hpp>
 
 #include <NOX.H>
+#include <NOX_LineSearch_Generic.H>
+#include <NOX_LineSearch_UserDefinedFactory.H>
 #include <NOX_MeritFunction_Generic.H>
 #include <NOX_Observer.hpp>
 #include <NOX_SolverStats.hpp>
@@ -22,6 +24,7 @@
 
 #include <chrono>
 #include <map>
+#include <algorithm>
 #include <cmath>
 
 namespace sinew {
@@ -54,6 +57,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     out_ = out;
     nominal_ = in_;
     nominal_.set_x(x0_);
+    energy_scale = (sys.material().mu_L + std::fabs(sys.material().lambda_L)) * sys.reference_volume();
   }
 
   void set_W_factory(const Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>>& f) { factory_ = f; }
@@ -76,6 +80,8 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   mutable double seconds_assembly = 0.0;
   mutable EvaluationTotals last;
+  // Size of the terms summed into the total energy: (mu_L + lambda_L) times the reference volume.
+  double energy_scale = 0.0;
 
  private:
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override { return out_; }
@@ -130,6 +136,61 @@ class EnergyMerit : public NOX::MeritFunction::Generic {
  private:
   const ElasticModel& model_;
   std::string name_ = "Sinew total energy";
+};
+
+// Backtracking on the total energy with an Armijo condition. Near convergence the energy decrease of a
+// Newton step (about |F|^2 / stiffness) drops below the round-off of the total energy, where a pure
+// energy test would reject every step: there a step is accepted when the energy is unchanged to
+// round-off and the residual norm decreased. The round-off of the total energy is set by the size of
+// its terms (each quadrature point adds and subtracts terms of order (mu + lambda) times its volume),
+// not by the total, which is near zero close to rest.
+class EnergyBacktrack : public NOX::LineSearch::Generic {
+ public:
+  EnergyBacktrack(const ElasticModel& model, int max_iters, double min_step)
+      : model_(model), max_iters_(max_iters), min_step_(min_step) {}
+
+  bool compute(NOX::Abstract::Group& grp, double& step, const NOX::Abstract::Vector& dir,
+               const NOX::Solver::Generic& s) override {
+    const NOX::Abstract::Group& old = s.getPreviousSolutionGroup();
+    // The old group's F was computed at its x; the model's last evaluation may be elsewhere.
+    const auto& xold = dynamic_cast<const NOX::Thyra::Vector&>(old.getX());
+    const double E0 = model_.energy(xold.getThyraVector());
+    const double slope = old.getF().innerProduct(dir);
+    const double F0 = old.getNormF();
+    step = 1.0;
+    for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= 0.5) {
+      grp.computeX(old, dir, step);
+      grp.computeF();  // one assembly gives F and the energy (ElasticModel::last)
+      const double E = model_.last.energy;
+      if (!std::isfinite(E) || model_.last.undefined > 0) continue;
+      if (E <= E0 + 1e-4 * step * std::min(slope, 0.0)) return true;
+      const double roundoff = 1e-11 * std::max({std::fabs(E0), std::fabs(E), model_.energy_scale});
+      if (std::fabs(E - E0) <= roundoff && grp.getNormF() < F0) return true;
+    }
+    // Failure: leave the old state in place; NOX reports the failed line search.
+    step = 0.0;
+    grp.computeX(old, dir, 0.0);
+    grp.computeF();
+    return false;
+  }
+
+ private:
+  const ElasticModel& model_;
+  int max_iters_;
+  double min_step_;
+};
+
+class EnergyBacktrackFactory : public NOX::LineSearch::UserDefinedFactory {
+ public:
+  explicit EnergyBacktrackFactory(const ElasticModel& model) : model_(model) {}
+  Teuchos::RCP<NOX::LineSearch::Generic> buildLineSearch(const Teuchos::RCP<NOX::GlobalData>&,
+                                                         Teuchos::ParameterList& params) const override {
+    return Teuchos::rcp(new EnergyBacktrack(model_, params.sublist("Energy Backtrack").get("Max Iters", 40),
+                                            params.sublist("Energy Backtrack").get("Minimum Step", 1e-10)));
+  }
+
+ private:
+  const ElasticModel& model_;
 };
 
 class ProgressObserver : public NOX::Observer {
@@ -320,6 +381,19 @@ struct NonlinearSolver::Impl {
     if (in.isSublist("Stratimikos")) overlay(*strat, in.sublist("Stratimikos"));
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
       auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
+      // A problem no larger than the coarse size is a one-level hierarchy: the coarse solver then sees the
+      // fine matrix itself, spread over all ranks, where KLU2 is wrong (repartitioning starts at level 1).
+      // Use relaxation there unless the user chose the coarse solver.
+      const bool user_coarse = in.isSublist("Stratimikos") &&
+                               in.sublist("Stratimikos").isSublist("Preconditioner Types") &&
+                               in.sublist("Stratimikos").sublist("Preconditioner Types").isSublist("MueLu") &&
+                               in.sublist("Stratimikos").sublist("Preconditioner Types").sublist("MueLu").isParameter("coarse: type");
+      const auto rows = s.owned_dofs()->getGlobalNumElements();
+      if (!user_coarse && s.comm()->getSize() > 1 && rows <= static_cast<std::size_t>(mlist.get<int>("coarse: max size"))) {
+        mlist.set("coarse: type", "RELAXATION");
+        mlist.sublist("coarse: params").set("relaxation: type", "Symmetric Gauss-Seidel");
+        mlist.sublist("coarse: params").set("relaxation: sweeps", 2);
+      }
       mlist.set("Coordinates", s.coordinates());
       mlist.set("Nullspace", s.rigid_body_modes());
     }
@@ -355,9 +429,16 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
   auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox_defaults));
   auto observer = Teuchos::rcp(new ProgressObserver(progress, report, *m.model));
   params->sublist("Solver Options").set<Teuchos::RCP<NOX::Observer>>("Observer", observer);
-  if (m.energy_merit)
+  if (m.energy_merit) {
     params->sublist("Solver Options")
         .set<Teuchos::RCP<NOX::MeritFunction::Generic>>("User Defined Merit Function", Teuchos::rcp(new EnergyMerit(*m.model)));
+    auto& ls = params->sublist("Line Search");
+    if (ls.get<std::string>("Method") == "Backtrack") {
+      ls.set("Method", "User Defined");
+      ls.set<Teuchos::RCP<NOX::LineSearch::UserDefinedFactory>>("User Defined Line Search Factory",
+                                                                Teuchos::rcp(new EnergyBacktrackFactory(*m.model)));
+    }
+  }
 
   try {
     auto group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));

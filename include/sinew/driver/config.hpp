@@ -22,6 +22,9 @@ struct SceneConfig {
 // Reads and validates a scene file. Throws InputError naming the file and the entry at fault.
 SceneConfig read_scene(const std::string& path);
 
+// Validates a parameter list already in memory; `name` stands for the file in messages.
+SceneConfig make_scene(Teuchos::RCP<Teuchos::ParameterList> params, const std::string& name);
+
 // Human-readable summary of a scene for the start of a run.
 std::string describe(const SceneConfig& scene);
 

@@ -1,7 +1,11 @@
 // The quasi-static run: load steps with step cutting, progress lines, log and output.
 #pragma once
 
+#include <sinew/algebra/elastic_system.hpp>
 #include <sinew/driver/config.hpp>
+
+#include <memory>
+#include <vector>
 
 namespace sinew {
 
@@ -11,6 +15,35 @@ struct RunOptions {
 
 // Exit codes of a run.
 enum ExitCode { kSuccess = 0, kFailure = 1, kUsage = 2, kInputError = 3, kNoConvergence = 4 };
+
+class Scene;
+class NonlinearSolver;
+class Output;
+struct StepRecord;
+
+// One quasi-static run: the scene, its solver and output, and the load-step loop.
+class Simulation {
+ public:
+  // Collective over comm (default: all ranks); throws InputError for bad input.
+  Simulation(const SceneConfig& config, const RunOptions& options,
+             Teuchos::RCP<const Teuchos::Comm<int>> comm = Teuchos::null);
+  ~Simulation();
+  // Runs all load steps; returns kSuccess or kNoConvergence (after writing the last converged state).
+  int run();
+  Scene& scene() { return *scene_; }
+  const Vector& displacement() const { return *u_; }
+  const std::vector<StepRecord>& records() const { return records_; }
+  const Output& output() const { return *out_; }
+
+ private:
+  SceneConfig config_;
+  RunOptions opt_;
+  std::unique_ptr<Scene> scene_;
+  std::unique_ptr<NonlinearSolver> solver_;
+  std::unique_ptr<Output> out_;
+  Teuchos::RCP<Vector> u_;
+  std::vector<StepRecord> records_;
+};
 
 // Runs a scene on all ranks of the default communicator; returns the process exit code. Never
 // throws for input or convergence problems: they are reported on stderr by rank 0.
