@@ -53,15 +53,17 @@ void require_known_entries(const Teuchos::ParameterList& list, const Teuchos::Pa
       std::string msg = "unknown entry '" + key + "' in " + where;
       const std::string near = closest_name(key, names);
       if (!near.empty()) msg += " (did you mean '" + near + "'?)";
-      throw InputError(msg);
+      throw InputError(msg, InputErrorKind::UnknownEntry);
     }
     const auto& have = list.entry(it);
     const auto& want = valid.getEntry(key);
     if (have.isList() != want.isList())
-      throw InputError("entry '" + key + "' in " + where + " must be " + (want.isList() ? "a sublist" : "a parameter"));
+      throw InputError("entry '" + key + "' in " + where + " must be " + (want.isList() ? "a sublist" : "a parameter"),
+                       InputErrorKind::WrongType);
     if (!have.isList() && have.getAny(false).type() != want.getAny(false).type())
       throw InputError("entry '" + key + "' in " + where + " has type " + have.getAny(false).typeName() +
-                       ", expected " + want.getAny(false).typeName());
+                       ", expected " + want.getAny(false).typeName(),
+                       InputErrorKind::WrongType);
   }
 }
 

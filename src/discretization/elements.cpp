@@ -80,7 +80,8 @@ ElementData compute_element_data(const Mesh& mesh, const Teuchos::Comm<int>& com
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, local_bad, Teuchos::outArg(global_bad));
   if (global_bad != std::numeric_limits<GlobalId>::max())
     throw InputError("Mesh: element " + std::to_string(global_bad) +
-                     " has a non-positive rest volume (degenerate or inverted element)");
+                     " has a non-positive rest volume (degenerate or inverted element)",
+                     InputErrorKind::BadMesh);
   return ed;
 }
 

@@ -21,6 +21,8 @@ Teuchos::ParameterList valid_mesh_parameters() {
   v.set("Upper corner", Teuchos::Array<double>({1.0, 1.0, 1.0}), "box: upper corner");
   v.set("Radius", 0.5, "cylinder: radius");
   v.set("Length", 1.0, "cylinder: length along z (from z = 0)");
+  v.set("Jitter", 0.0, "move nodes not on the bounding box at random by up to this many cell sizes");
+  v.set("Jitter seed", 1, "seed of the jitter");
   return v;
 }
 
@@ -49,6 +51,9 @@ MeshSpec mesh_from_parameters(const Teuchos::ParameterList& in) {
       throw InputError("Mesh: 'Elements' entries must lie in [1, 100000], got " + std::to_string(n[k]));
     s.cells[k] = n[k];
   }
+  s.jitter = get_or<double>(in, "Jitter", 0.0);
+  s.jitter_seed = get_or<int>(in, "Jitter seed", 1);
+  if (!(s.jitter >= 0.0 && s.jitter < 10.0)) throw InputError("Mesh: 'Jitter' must lie in [0, 10)");
   if (s.shape == "box") {
     const auto lo = get_arr("Lower corner", Teuchos::Array<double>()), hi = get_arr("Upper corner", Teuchos::Array<double>());
     if (lo.size() != 3) throw InputError("Mesh: 'Lower corner' needs 3 entries");
@@ -119,9 +124,10 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
   const int nz = spec.cells[2];
   if (nz < P)
     throw InputError("Mesh: " + std::to_string(nz) + " element layers along z cannot be split over " +
-                     std::to_string(P) + " MPI ranks (need at least one layer per rank)");
+                     std::to_string(P) + " MPI ranks (need at least one layer per rank)",
+                     InputErrorKind::BadMesh);
   const Pattern pat = make_pattern(spec);
-  if (pat.cells == 0) throw InputError("Mesh: the shape has no active cells; increase 'Elements'");
+  if (pat.cells == 0) throw InputError("Mesh: the shape has no active cells; increase 'Elements'", InputErrorKind::BadMesh);
 
   Mesh m;
   m.type = spec.element;
@@ -162,6 +168,16 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
         Xh(l, 0) = spec.lower[0] + i * dx[0];
         Xh(l, 1) = spec.lower[1] + j * dx[1];
         Xh(l, 2) = spec.lower[2] + k * dx[2];
+        const bool on_box = i == 0 || i == pat.nx || j == 0 || j == pat.ny || k == 0 || k == nz;
+        if (spec.jitter > 0.0 && !on_box) {
+          for (int d = 0; d < 3; ++d) {  // deterministic in the global id: the same on every rank
+            std::uint64_t x = static_cast<std::uint64_t>(m.node_gid[l]) * 3 + d + 0x9E3779B97F4A7C15ull * spec.jitter_seed;
+            x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+            x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+            x ^= x >> 31;
+            Xh(l, d) += spec.jitter * dx[d] * (2.0 * (static_cast<double>(x >> 11) / 9007199254740992.0) - 1.0);
+          }
+        }
       }
   }
   Kokkos::deep_copy(m.X, Xh);

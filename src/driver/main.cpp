@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     }
     return sinew::run_scene(scene, sinew::RunOptions{quiet});
   } catch (const sinew::InputError& e) {
-    if (root) std::cerr << "sinew: input error: " << e.what() << "\n";
+    if (root) std::cerr << "sinew: input error [" << sinew::to_string(e.kind) << "]: " << e.what() << "\n";
     return 3;
   } catch (const std::exception& e) {
     if (root) std::cerr << "sinew: error: " << e.what() << "\n";

@@ -139,7 +139,7 @@ int run_scene(const SceneConfig& config, const RunOptions& opt) {
     Simulation sim(config, opt);
     return sim.run();
   } catch (const InputError& e) {
-    if (root) std::fprintf(stderr, "sinew: input error: %s\n", e.what());
+    if (root) std::fprintf(stderr, "sinew: input error [%s]: %s\n", to_string(e.kind), e.what());
     return kInputError;
   } catch (const std::exception& e) {
     if (root) std::fprintf(stderr, "sinew: error: %s\n", e.what());

@@ -92,7 +92,7 @@ Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const s
   try {
     require_known_entries(params, valid_output_parameters(), "Output");
   } catch (const InputError& e) {
-    throw InputError(scene_file + ": " + e.what());
+    throw e.prefixed(scene_file + ": ");
   }
   dir_ = get_or<std::string>(params, "Directory", "");
   if (dir_.empty()) dir_ = "results/" + name_;
@@ -116,7 +116,7 @@ Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const s
     }
   }
   Teuchos::broadcast(comm, 0, &ok);
-  if (!ok) throw InputError(scene_file + ": Output: cannot create results folder '" + dir_ + "': " + err);
+  if (!ok) throw InputError(scene_file + ": Output: cannot create results folder '" + dir_ + "': " + err, InputErrorKind::File);
   if (root_) {
     log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
             "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"

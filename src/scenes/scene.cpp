@@ -86,7 +86,7 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
     const MeshSpec ms = mesh_from_parameters(P.isSublist("Mesh") ? P.sublist("Mesh") : Teuchos::ParameterList());
     system_ = std::make_unique<ElasticSystem>(comm, build_mesh(ms, *comm), config.material);
   } catch (const InputError& e) {
-    throw InputError(file + e.what());
+    throw e.prefixed(file);
   }
   const Mesh& mesh = system_->mesh();
   X_ = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
@@ -96,7 +96,7 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
   try {
     require_known_entries(loading, vl, "Loading");
   } catch (const InputError& e) {
-    throw InputError(file + e.what());
+    throw e.prefixed(file);
   }
   steps_ = get_or<int>(loading, "Steps", 1);
   if (steps_ < 1 || steps_ > 1000000) throw InputError(file + "Loading: 'Steps' must lie in [1, 1e6]");
@@ -117,12 +117,12 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
     for (auto it = list.begin(); it != list.end(); ++it) {
       const std::string bname = list.name(it);
       const std::string where = "Loading/Boundary conditions/" + bname;
-      if (!list.isSublist(bname)) throw InputError(file + where + " must be a sublist");
+      if (!list.isSublist(bname)) throw InputError(file + where + " must be a sublist", InputErrorKind::WrongType);
       const auto& p = list.sublist(bname);
       try {
         require_known_entries(p, vbc, where);
       } catch (const InputError& e) {
-        throw InputError(file + e.what());
+        throw e.prefixed(file);
       }
       BoundaryCondition bc;
       bc.name = bname;
@@ -150,7 +150,7 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
         try {
           pred = face_predicate(mesh, bc.region.substr(5));
         } catch (const InputError& e) {
-          throw InputError(file + where + ": 'Region' " + e.what());
+          throw e.prefixed(file + where + ": 'Region' ");
         }
       } else if (bc.region == "box") {
         const auto lo = vec3(p, "Box lower", file + where), hi = vec3(p, "Box upper", file + where);
@@ -178,7 +178,7 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
         if (static_cast<std::size_t>(nd) < mesh.n_owned_nodes) ++owned;
       long long total = 0;
       Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
-      if (total == 0) throw InputError(file + where + ": region \"" + bc.region + "\" selects no node");
+      if (total == 0) throw InputError(file + where + ": region \"" + bc.region + "\" selects no node", InputErrorKind::EmptyRegion);
       // A node under two conditions would be prescribed twice: refuse (all ranks agree, since the
       // check is collective below).
       int local_conflict = -1;
@@ -190,7 +190,8 @@ Scene::Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> c
       Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, local_conflict, Teuchos::outArg(conflict));
       if (conflict >= 0)
         throw InputError(file + where + ": its nodes overlap those of '" + bcs_[conflict].name +
-                         "'; a node cannot be both '" + bcs_[conflict].name + "' and '" + bname + "'");
+                         "'; a node cannot be both '" + bcs_[conflict].name + "' and '" + bname + "'",
+                         InputErrorKind::ConflictingConditions);
       bcs_.push_back(std::move(bc));
     }
   }

@@ -34,6 +34,8 @@ struct MeshSpec {
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{{4, 4, 4}};  // box: cells per axis; cylinder: cells across the diameter (x, y), along z
   std::array<double, 3> lower{{0, 0, 0}}, upper{{1, 1, 1}};  // box corners; cylinder: its bounding box
+  double jitter = 0.0;  // random displacement of nodes off the bounding box, in cell sizes (robustness tests)
+  int jitter_seed = 1;
 };
 
 // Mesh spec from a "Mesh" sublist (validated; throws InputError naming the entry).
