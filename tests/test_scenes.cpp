@@ -39,7 +39,7 @@ struct RunResult {
 };
 
 RunResult run(Teuchos::RCP<Teuchos::ParameterList> p, Teuchos::RCP<const Teuchos::Comm<int>> comm = Teuchos::null) {
-  Simulation sim(make_scene(p, "test scene"), RunOptions{true}, comm);
+  Simulation sim(make_scene(p, "test scene"), RunOptions{true, ""}, comm);
   const int code = sim.run();
   return {code, gather(sim.displacement()), sim.records()};
 }
@@ -86,7 +86,7 @@ TEST(Scenes, TwistConvergesAndSubstepsReachTheSameState) {
 TEST(Scenes, ScrambleReturnsToRest) {
   auto p = shipped("scramble", {4, 4, 4}, "test_results/scramble" + tag());
   p->sublist("Solver").set("Absolute tolerance", 1e-4);
-  Simulation sim(make_scene(p, "scramble"), RunOptions{true});
+  Simulation sim(make_scene(p, "scramble"), RunOptions{true, ""});
   // The start is really scrambled: inverted elements everywhere.
   sim.scene().initial_state(const_cast<Vector&>(sim.displacement()));
   const auto start = sim.scene().system().evaluate(sim.displacement(), nullptr, nullptr);
@@ -177,7 +177,7 @@ TEST(Scenes, HdfOutputReadsBackAsInMemory) {
   const std::string dir = "test_results/drop" + tag();
   auto p = shipped("drop", {8, 2, 2}, dir);
   p->sublist("Loading").set("Steps", 2);
-  Simulation sim(make_scene(p, "drop"), RunOptions{true});
+  Simulation sim(make_scene(p, "drop"), RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
   const auto u = gather(sim.displacement());
   // The beam sags: its free end moved down.

@@ -3,6 +3,7 @@
 #include <sinew/driver/config.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
+#include <sinew/driver/signals.hpp>
 
 #include <Tpetra_Core.hpp>
 
@@ -22,10 +23,13 @@ const char* kUsage =
     "  --version, --info      print versions, Kokkos backends, threads, MPI ranks, HDF5, and exit\n"
     "  --check                read and validate SCENE.xml, print the configuration, and exit\n"
     "  --quiet                no progress lines\n"
+    "  --output DIR           write results to DIR (overrides Output/Directory)\n"
+    "  --restart FILE         continue the run from a checkpoint (DIR/checkpoint.h5) of the same scene\n"
     "  --kokkos-threads=N     OpenMP threads per rank (or set OMP_NUM_THREADS)\n"
     "  -h, --help             this text\n"
     "\n"
-    "exit codes: 0 done, 1 error, 2 bad command line, 3 bad input, 4 a step did not converge\n";
+    "exit codes: 0 done, 1 error, 2 bad command line, 3 bad input, 4 a step did not converge,\n"
+    "            128 + N stopped by signal N (SIGINT, SIGTERM) after writing a checkpoint\n";
 
 int rank_of_world() {
   int r = 0;
@@ -44,6 +48,7 @@ int main(int argc, char** argv) {
   const bool root = rank_of_world() == 0;
   std::string scene_path;
   bool info = false, check = false, quiet = false;
+  std::string restart, output;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--version" || a == "--info") {
@@ -52,6 +57,12 @@ int main(int argc, char** argv) {
       check = true;
     } else if (a == "--quiet") {
       quiet = true;
+    } else if (a == "--restart" || a == "--output") {
+      if (i + 1 >= argc) {
+        if (root) std::cerr << "sinew: " << a << " needs a value\n";
+        return 2;
+      }
+      (a == "--restart" ? restart : output) = argv[++i];
     } else if (a == "-h" || a == "--help") {
       if (root) std::cout << kUsage;
       return 0;
@@ -74,12 +85,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const sinew::SceneConfig scene = sinew::read_scene(scene_path);
+    sinew::SceneConfig scene = sinew::read_scene(scene_path);
+    if (!output.empty()) scene.params->sublist("Output").set("Directory", output);
     if (check) {
       if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
       return 0;
     }
-    return sinew::run_scene(scene, sinew::RunOptions{quiet});
+    sinew::install_signal_handlers();
+    return sinew::run_scene(scene, sinew::RunOptions{quiet, restart});
   } catch (const sinew::InputError& e) {
     if (root) std::cerr << "sinew: input error [" << sinew::to_string(e.kind) << "]: " << e.what() << "\n";
     return 3;

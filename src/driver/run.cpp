@@ -1,11 +1,13 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
+#include <sinew/driver/signals.hpp>
 #include <sinew/io/output.hpp>
 #include <sinew/materials/parameters.hpp>
 #include <sinew/scenes/scene.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 
+#include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_TimeMonitor.hpp>
 #include <Tpetra_Core.hpp>
@@ -30,8 +32,21 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   if (comm.is_null()) comm = Tpetra::getDefaultComm();
   scene_ = std::make_unique<Scene>(config_, comm);
   solver_ = std::make_unique<NonlinearSolver>(scene_->system(), sublist_or_empty(*config_.params, "Solver"));
-  out_ = std::make_unique<Output>(sublist_or_empty(*config_.params, "Output"), *scene_, config_.file);
   u_ = scene_->system().create_vector();
+  int restart_step = -1;
+  if (!opt_.restart_file.empty()) {
+    const auto c = Output::read_checkpoint(opt_.restart_file, *scene_, *u_);
+    restart_step = c.step;
+    first_step_ = c.step + 1;
+    start_load_ = c.load;
+  }
+  out_ = std::make_unique<Output>(sublist_or_empty(*config_.params, "Output"), *scene_, config_.file, restart_step);
+  // Signals are checked collectively, so that every rank stops at the same point.
+  solver_->set_interrupt([comm] {
+    int s = pending_signal(), any = 0;
+    Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, s, Teuchos::outArg(any));
+    return any != 0;
+  });
 }
 
 Simulation::~Simulation() = default;
@@ -59,15 +74,24 @@ int Simulation::run() {
                 solver.absolute_tolerance(), out.directory().c_str());
     std::fflush(stdout);
   }
-  out.write_mesh();
-  scene.initial_state(u);
   const double V0 = sys.reference_volume();
-  out.write_step(0, 0.0, u);
+  if (first_step_ == 1) {
+    out.write_mesh();
+    scene.initial_state(u);
+    out.write_step(0, 0.0, u);
+  } else if (talk) {
+    std::printf("  restarting after step %d (load %.4g) from %s\n", first_step_ - 1, start_load_, opt_.restart_file.c_str());
+  }
+  auto stop_signal = [&] {
+    int s = pending_signal(), any = 0;
+    Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, s, Teuchos::outArg(any));
+    return any;
+  };
 
   auto trial = sys.create_vector();
-  double t_done = 0.0;
+  double t_done = start_load_;
   const int n = scene.steps();
-  for (int k = 1; k <= n; ++k) {
+  for (int k = first_step_; k <= n; ++k) {
     const double target = static_cast<double>(k) / n;
     double dt = target - t_done;
     StepRecord rec;
@@ -101,6 +125,7 @@ int Simulation::run() {
         t_done = t;
         continue;
       }
+      if (r.reason == "interrupted") break;
       if (talk) std::printf("  step did not converge: %s\n", r.reason.c_str());
       if (rec.cuts >= scene.max_cuts()) {
         if (root)
@@ -114,11 +139,20 @@ int Simulation::run() {
       ++rec.cuts;
       dt *= 0.5;
     }
+    if (const int sig = stop_signal(); sig != 0 && t_done < target - 1e-14) {
+      // Interrupted inside step k: the checkpoint of step k-1 (written below at every step when
+      // checkpoints are on) is the state to continue from; write it now in case they are off.
+      if (k > first_step_ || first_step_ == 1) out.write_checkpoint(k - 1, static_cast<double>(k - 1) / n, u);
+      if (root) std::fprintf(stderr, "sinew: stopped by signal %d during step %d; checkpoint of step %d in %s\n", sig, k, k - 1,
+                             out.checkpoint_file().c_str());
+      return 128 + sig;
+    }
     rec.totals = sys.evaluate(u, nullptr, nullptr);
     rec.volume_ratio = rec.totals.volume / V0;
     out.log(rec);
     records_.push_back(rec);
     if (k % out.every() == 0 || k == n) out.write_step(k, target, u);
+    if (out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n)) out.write_checkpoint(k, target, u);
     if (talk) {
       std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
                   "%.2f s (assembly %.2f, preconditioner %.2f, CG %.2f, line search %.2f)\n",
@@ -126,6 +160,11 @@ int Simulation::run() {
                   rec.totals.min_J, rec.totals.inverted, rec.solve.seconds_total, rec.solve.seconds_assembly,
                   rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search);
       std::fflush(stdout);
+    }
+    if (const int sig = stop_signal(); sig != 0 && k < n) {
+      if (out.checkpoint_every() == 0 || k % out.checkpoint_every() != 0) out.write_checkpoint(k, target, u);
+      if (root) std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", sig, k, out.checkpoint_file().c_str());
+      return 128 + sig;
     }
   }
   if (talk) std::printf("done in %.1f s; results in %s\n", elapsed(), out.directory().c_str());

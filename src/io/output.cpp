@@ -21,6 +21,7 @@ Teuchos::ParameterList valid_output_parameters() {
   v.set("Directory", std::string(""), "results folder (default results/<Scene>)");
   v.set("Every", 1, "write fields every this many steps (the last step is always written)");
   v.set("HDF5", true, "write HDF5/XDMF fields (the CSV log is always written)");
+  v.set("Checkpoint every", 1, "write DIR/checkpoint.h5 every this many steps (0: never); sinew --restart continues from it");
   return v;
 }
 
@@ -85,7 +86,7 @@ hid_t create_parallel(const std::string& path, MPI_Comm comm) {
 
 }  // namespace
 
-Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file)
+Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file, int restart_step)
     : scene_(scene), name_(scene.name()) {
   const auto& comm = *scene.system().comm();
   root_ = comm.getRank() == 0;
@@ -99,6 +100,8 @@ Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const s
   every_ = get_or<int>(params, "Every", 1);
   if (every_ < 1) throw InputError(scene_file + ": Output: 'Every' must be at least 1");
   hdf5_ = get_or<bool>(params, "HDF5", true);
+  checkpoint_every_ = get_or<int>(params, "Checkpoint every", 1);
+  if (checkpoint_every_ < 0) throw InputError(scene_file + ": Output: 'Checkpoint every' must be >= 0");
   int ok = 1;
   std::string err;
   if (root_) {
@@ -108,21 +111,35 @@ Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const s
       ok = 0;
       err = ec.message();
     } else {
+      // On restart keep the rows of the steps before the checkpoint (a row written after it belongs to
+      // a step that will be computed again).
+      std::vector<std::string> keep;
+      if (restart_step >= 0) {
+        std::ifstream old(dir_ + "/log.csv");
+        std::string line;
+        if (std::getline(old, line))
+          while (std::getline(old, line))
+            if (!line.empty() && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
+      }
       log_.open(dir_ + "/log.csv", std::ios::trunc);
       if (!log_) {
         ok = 0;
         err = "cannot write " + dir_ + "/log.csv";
+      } else {
+        log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
+                "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
+                "seconds_total\n";
+        for (const auto& l : keep) log_ << l << "\n";
+        log_.flush();
       }
     }
   }
   Teuchos::broadcast(comm, 0, &ok);
   if (!ok) throw InputError(scene_file + ": Output: cannot create results folder '" + dir_ + "': " + err, InputErrorKind::File);
-  if (root_) {
-    log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
-            "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
-            "seconds_total\n";
-    log_.flush();
-  }
+  // Step files already on disk from before the restart point belong to the run's history.
+  if (restart_step >= 0 && hdf5_)
+    for (int k = 0; k <= restart_step; ++k)
+      if (fs::exists(step_file(k))) written_.emplace_back(k, static_cast<double>(k) / scene.steps());
 }
 
 std::string Output::step_file(int step) const {
@@ -244,6 +261,83 @@ void Output::log(const StepRecord& r) {
        << s.seconds_preconditioner << "," << s.seconds_linear << "," << s.seconds_line_search << "," << s.seconds_total
        << "\n";
   log_.flush();
+}
+
+void Output::write_checkpoint(int step, double load, const Vector& u) {
+  const ElasticSystem& sys = scene_.system();
+  const Mesh& m = sys.mesh();
+  MPI_Comm comm = raw_comm(*sys.comm());
+  const long long n_owned = static_cast<long long>(m.n_owned_nodes);
+  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
+  auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+  std::vector<double> disp(uv.data(), uv.data() + 3 * n_owned);
+  const std::string path = checkpoint_file(), tmp = path + ".tmp";
+  {
+    H5 file(create_parallel(tmp, comm), H5Fclose, "create " + tmp);
+    write_rows(file.id, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
+    write_attribute(file.id, "step", step);
+    write_attribute(file.id, "load", load);
+    write_attribute(file.id, "global_nodes", static_cast<double>(m.global_nodes));
+    write_attribute(file.id, "steps", scene_.steps());
+  }
+  MPI_Barrier(comm);
+  // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one.
+  if (root_) fs::rename(tmp, path);
+  MPI_Barrier(comm);
+}
+
+Output::Checkpoint Output::read_checkpoint(const std::string& path, const Scene& scene, Vector& u) {
+  const ElasticSystem& sys = scene.system();
+  const Mesh& m = sys.mesh();
+  MPI_Comm comm = raw_comm(*sys.comm());
+  int exists = fs::exists(path) ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &exists, 1, MPI_INT, MPI_MIN, comm);
+  if (!exists) throw InputError("restart file '" + path + "' does not exist", InputErrorKind::File);
+  H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
+  H5Pset_fapl_mpio(fapl.id, comm, MPI_INFO_NULL);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report errors ourselves
+  const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id);
+  if (fid < 0) throw InputError("restart file '" + path + "' is not a readable HDF5 file", InputErrorKind::File);
+  H5 file(fid, H5Fclose, "open " + path);
+  auto attribute = [&](const char* name) {
+    double v = -1.0;
+    const hid_t a = H5Aopen(file.id, name, H5P_DEFAULT);
+    if (a < 0) throw InputError("restart file '" + path + "' has no '" + name + "' attribute", InputErrorKind::File);
+    H5Aread(a, H5T_NATIVE_DOUBLE, &v);
+    H5Aclose(a);
+    return v;
+  };
+  Checkpoint c;
+  c.step = static_cast<int>(attribute("step"));
+  c.load = attribute("load");
+  const long long nodes = static_cast<long long>(attribute("global_nodes"));
+  if (nodes != m.global_nodes)
+    throw InputError("restart file '" + path + "' was written for a mesh of " + std::to_string(nodes) +
+                         " nodes; this scene has " + std::to_string(m.global_nodes),
+                     InputErrorKind::File);
+  const int steps = static_cast<int>(attribute("steps"));
+  if (steps != scene.steps())
+    throw InputError("restart file '" + path + "' was written for " + std::to_string(steps) +
+                         " load steps; this scene has " + std::to_string(scene.steps()),
+                     InputErrorKind::File);
+  const long long n_owned = static_cast<long long>(m.n_owned_nodes);
+  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
+  H5 dset(H5Dopen2(file.id, "/displacement", H5P_DEFAULT), H5Dclose, path + ": /displacement");
+  H5 space(H5Dget_space(dset.id), H5Sclose, "dataspace");
+  hsize_t start[2] = {static_cast<hsize_t>(first_node), 0}, cnt[2] = {static_cast<hsize_t>(n_owned), 3};
+  H5 mem(H5Screate_simple(2, cnt, nullptr), H5Sclose, "memspace");
+  if (n_owned > 0) {
+    H5Sselect_hyperslab(space.id, H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+  } else {
+    H5Sselect_none(space.id);
+    H5Sselect_none(mem.id);
+  }
+  std::vector<double> disp(3 * n_owned);
+  if (H5Dread(dset.id, H5T_NATIVE_DOUBLE, mem.id, space.id, H5P_DEFAULT, disp.data()) < 0)
+    throw InputError("restart file '" + path + "': cannot read /displacement", InputErrorKind::File);
+  auto uv = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (long long i = 0; i < 3 * n_owned; ++i) uv(i, 0) = disp[i];
+  return c;
 }
 
 }  // namespace sinew

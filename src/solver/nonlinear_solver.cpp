@@ -195,8 +195,8 @@ class EnergyBacktrackFactory : public NOX::LineSearch::UserDefinedFactory {
 
 class ProgressObserver : public NOX::Observer {
  public:
-  ProgressObserver(std::function<void(const NewtonIterate&)> cb, SolveReport& report, const ElasticModel& model)
-      : cb_(std::move(cb)), report_(report), model_(model) {}
+  ProgressObserver(std::function<void(const NewtonIterate&)> cb, std::function<bool()> interrupt, const ElasticModel& model)
+      : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
   void runPreLineSearch(const NOX::Solver::Generic&) override {
     t_ls_ = Clock::now();
     asm_before_ls_ = model_.seconds_assembly;
@@ -212,12 +212,16 @@ class ProgressObserver : public NOX::Observer {
     if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     if (cb_) cb_(it);
+    if (interrupt_ && interrupt_()) throw Interrupted();
   }
+  struct Interrupted : std::runtime_error {
+    Interrupted() : std::runtime_error("interrupted") {}
+  };
   double line_search_ = 0.0;
 
  private:
   std::function<void(const NewtonIterate&)> cb_;
-  SolveReport& report_;
+  std::function<bool()> interrupt_;
   const ElasticModel& model_;
   Clock::time_point t_ls_;
   double asm_before_ls_ = 0.0;
@@ -333,7 +337,8 @@ struct NonlinearSolver::Impl {
   double abs_tol = 1e-2, rel_tol = 0.0;
   int max_iters = 50;
   bool energy_merit = true;
-  double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
+  double prec_seen = 0.0, linear_seen = 0.0;
+  std::function<bool()> interrupt;  // NOX's cumulative timers at the end of the previous solve
 
   Impl(ElasticSystem& s, const Teuchos::ParameterList& in) : sys(s) {
     const Teuchos::ParameterList valid = valid_solver_parameters();
@@ -417,6 +422,7 @@ NonlinearSolver::NonlinearSolver(ElasticSystem& system, const Teuchos::Parameter
 NonlinearSolver::~NonlinearSolver() = default;
 
 double NonlinearSolver::absolute_tolerance() const { return impl_->abs_tol; }
+void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->interrupt = std::move(interrupt); }
 
 SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
   SolveReport report;
@@ -427,7 +433,7 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
   NOX::Thyra::Vector x0(x);
 
   auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox_defaults));
-  auto observer = Teuchos::rcp(new ProgressObserver(progress, report, *m.model));
+  auto observer = Teuchos::rcp(new ProgressObserver(progress, m.interrupt, *m.model));
   params->sublist("Solver Options").set<Teuchos::RCP<NOX::Observer>>("Observer", observer);
   if (m.energy_merit) {
     params->sublist("Solver Options")
@@ -478,6 +484,9 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
     // Copy the solution back (the Thyra vector wraps u, but NOX keeps its own copies).
     const auto& xs = dynamic_cast<const NOX::Thyra::Vector&>(final_group.getX());
     u.assign(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(xs.getThyraVector())));
+  } catch (const ProgressObserver::Interrupted&) {
+    report.converged = false;
+    report.reason = "interrupted";
   } catch (const std::exception& e) {
     report.converged = false;
     std::string what = e.what();

@@ -10,10 +10,12 @@
 namespace sinew {
 
 struct RunOptions {
-  bool quiet = false;  // no progress lines (errors still go to stderr)
+  bool quiet = false;        // no progress lines (errors still go to stderr)
+  std::string restart_file;  // continue from this checkpoint (empty: start from the beginning)
 };
 
 // Exit codes of a run.
+// A run stopped by SIGINT/SIGTERM exits with 128 + the signal number, after writing a checkpoint.
 enum ExitCode { kSuccess = 0, kFailure = 1, kUsage = 2, kInputError = 3, kNoConvergence = 4 };
 
 class Scene;
@@ -43,6 +45,8 @@ class Simulation {
   std::unique_ptr<Output> out_;
   Teuchos::RCP<Vector> u_;
   std::vector<StepRecord> records_;
+  int first_step_ = 1;       // 1, or the step after the checkpoint a restart continues from
+  double start_load_ = 0.0;  // load fraction of the state in u_ at the start
 };
 
 // Runs a scene on all ranks of the default communicator; returns the process exit code. Never

@@ -7,6 +7,7 @@
 //                          attributes: load fraction, step
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/log.csv            one row per converged load step
+//   DIR/checkpoint.h5      /displacement and the step and load reached: everything a restart needs
 #pragma once
 
 #include <sinew/scenes/scene.hpp>
@@ -31,8 +32,11 @@ struct StepRecord {
 
 class Output {
  public:
-  // params: the scene's "Output" sublist (validated here). Collective.
-  Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file);
+  // params: the scene's "Output" sublist (validated here). Collective. With restart_step >= 0 the run
+  // continues an earlier one in the same folder: the log keeps its rows up to that step and the XDMF
+  // index its step files.
+  Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file,
+         int restart_step = -1);
 
   bool enabled() const { return hdf5_; }
   const std::string& directory() const { return dir_; }
@@ -46,13 +50,26 @@ class Output {
   // Path of the HDF5 file of a written step.
   std::string step_file(int step) const;
 
+  int checkpoint_every() const { return checkpoint_every_; }
+  std::string checkpoint_file() const { return dir_ + "/checkpoint.h5"; }
+  // Collective: the state after `step` converged at load fraction `load` (aside, then renamed).
+  void write_checkpoint(int step, double load, const Vector& u);
+
+  struct Checkpoint {
+    int step = 0;
+    double load = 0.0;
+  };
+  // Collective: reads a checkpoint into u (which must live on the same mesh). Throws InputError when the
+  // file is missing, unreadable or from another mesh.
+  static Checkpoint read_checkpoint(const std::string& path, const Scene& scene, Vector& u);
+
  private:
   void write_xdmf() const;
 
   const Scene& scene_;
   std::string dir_, name_;
   bool hdf5_ = true;
-  int every_ = 1;
+  int every_ = 1, checkpoint_every_ = 1;
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
   std::ofstream log_;

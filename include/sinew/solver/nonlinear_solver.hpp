@@ -52,6 +52,10 @@ class NonlinearSolver {
 
   double absolute_tolerance() const;
 
+  // Called after every Newton iteration (collectively); returning true stops the solve with reason
+  // "interrupted".
+  void set_interrupt(std::function<bool()> interrupt);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
