@@ -13,6 +13,8 @@
 #include <Tpetra_Core.hpp>
 #include <Tpetra_Vector.hpp>
 
+#include <sys/resource.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -167,7 +169,13 @@ int Simulation::run() {
       return 128 + sig;
     }
   }
-  if (talk) std::printf("done in %.1f s; results in %s\n", elapsed(), out.directory().c_str());
+  struct rusage ru {};
+  getrusage(RUSAGE_SELF, &ru);
+  double peak_mb = static_cast<double>(ru.ru_maxrss) / 1024.0, max_mb = 0.0;  // ru_maxrss is in kB on Linux
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, peak_mb, Teuchos::outArg(max_mb));
+  if (talk)
+    std::printf("done in %.1f s; peak memory %.0f MB per rank (%.0f bytes per DOF); results in %s\n", elapsed(), max_mb,
+                max_mb * 1048576.0 * comm->getSize() / (3.0 * sys.mesh().global_nodes), out.directory().c_str());
   if (std::getenv("SINEW_TIMERS")) Teuchos::TimeMonitor::summarize();
   return kSuccess;
 }

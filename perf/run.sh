@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# Sinew's performance suite: one command, a JSON file, a Markdown table and PNG plots.
+#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--quick]
+# --large adds the ~1M-DOF stretch cylinder (tens of minutes); --quick uses the smallest sizes only.
+# Timings on a shared machine are noisy: the report gives the best of a few repetitions where it can.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+repo=$(cd "$here/.." && pwd)
+out=$repo/results/perf
+large=0 quick=0
+build_args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) out=$2; shift 2 ;;
+    --large) large=1; shift ;;
+    --quick) quick=1; shift ;;
+    --deps-cache|--build-dir) build_args+=("$1" "$2"); shift 2 ;;
+    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    *) echo "perf/run.sh: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+"$repo/scripts/build.sh" "${build_args[@]}" >&2
+build=${SINEW_BUILD_DIR:-$repo/build}
+for ((i = 0; i < ${#build_args[@]}; i++)); do [ "${build_args[$i]}" = --build-dir ] && build=${build_args[$((i + 1))]}; done
+mkdir -p "$out"
+t0=$SECONDS
+mpi=(mpirun --oversubscribe)
+[ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)
+omp() { env OMP_NUM_THREADS=$1 OMP_PROC_BIND=spread OMP_PLACES=threads "${@:2}"; }
+log() { echo "[perf $(( SECONDS - t0 ))s] $*" >&2; }
+
+# 1. Material kernels and assembly: Serial and OpenMP in the same run, OpenMP with 1 and 2 threads.
+min_time=0.5; sizes='/(65536|40)/'
+[ $quick -eq 1 ] && { min_time=0.05; sizes='/(64|4)/'; }
+for t in 1 2; do
+  log "material kernels, $t thread(s)"
+  omp $t "$build/perf/bench_materials" --benchmark_filter="$sizes" --benchmark_min_time=$min_time \
+    --benchmark_format=json --benchmark_out="$out/materials_t$t.json" >/dev/null
+  log "assembly, $t thread(s)"
+  omp $t "$build/perf/bench_assembly" --benchmark_filter="$sizes|refill" --benchmark_min_time=$min_time \
+    --benchmark_format=json --benchmark_out="$out/assembly_t$t.json" >/dev/null
+done
+
+# 2. Bandwidth bound and one CG iteration.
+cells=40; [ $quick -eq 1 ] && cells=8
+for t in 1 2; do
+  log "bandwidth, $t thread(s)"
+  omp $t "$build/perf/bench_bandwidth" --cells $cells > "$out/bandwidth_t$t.json"
+done
+
+# 3. Whole scenes. The twist at 15^3 (the paper's) on three layouts of this 2-core machine.
+scene() {  # name xml layout(ranks threads) extra sinew args...
+  local name=$1 xml=$2 ranks=$3 threads=$4; shift 4
+  local dir="$out/scenes/$name"
+  log "scene $name ($ranks rank(s) x $threads thread(s))"
+  if [ "$ranks" -eq 1 ]; then
+    omp "$threads" "$build/sinew" --output "$dir" "$@" "$xml" > "$out/scenes/$name.out" 2>&1 || true
+  else
+    omp "$threads" "${mpi[@]}" -np "$ranks" "$build/sinew" --output "$dir" "$@" "$xml" > "$out/scenes/$name.out" 2>&1 || true
+  fi
+}
+mkdir -p "$out/scenes"
+twist=$repo/inputs/twist.xml
+if [ $quick -eq 1 ]; then
+  sed 's/{15, 15, 15}/{6, 6, 6}/' "$twist" > "$out/scenes/twist_quick.xml"; twist=$out/scenes/twist_quick.xml
+fi
+scene twist_1x1 "$twist" 1 1
+scene twist_1x2 "$twist" 1 2
+scene twist_2x1 "$twist" 2 1
+# Refinement: 8x the elements of the twist (30^3), for CG-per-Newton growth.
+if [ $quick -eq 0 ]; then
+  sed 's/{15, 15, 15}/{30, 30, 30}/' "$repo/inputs/twist.xml" > "$out/scenes/twist30.xml"
+  scene twist30_1x2 "$out/scenes/twist30.xml" 1 2
+fi
+# Stretch ladder: ~10^4 and ~10^5 DOFs (and ~10^6 with --large), stretched to 3.4x.
+ladder="16,16,32"; [ $quick -eq 1 ] && ladder="8,8,16"
+[ $quick -eq 0 ] && ladder="$ladder 32,32,64"
+[ $large -eq 1 ] && ladder="$ladder 72,72,144"
+for c in $ladder; do
+  sed "s/{32, 32, 64}/{$c}/" "$repo/inputs/stretch.xml" > "$out/scenes/stretch_${c//,/x}.xml"
+  scene "stretch_${c//,/x}_1x2" "$out/scenes/stretch_${c//,/x}.xml" 1 2
+done
+
+log "report"
+py=/usr/bin/python3; [ -x $py ] || py=python3
+$py "$here/report.py" "$out"
+log "done: $out/report.md"
