@@ -76,9 +76,17 @@ fi
 ladder="16,16,32"; [ $quick -eq 1 ] && ladder="8,8,16"
 [ $quick -eq 0 ] && ladder="$ladder 32,32,64"
 [ $large -eq 1 ] && ladder="$ladder 72,72,144"
+# The smallest size runs the whole 12-step stretch; larger ones its first 3 steps (same increments,
+# to 1.6x), which is what a per-step cost needs, and keeps the suite within 20 minutes.
+first=1
 for c in $ladder; do
-  sed "s/{32, 32, 64}/{$c}/" "$repo/inputs/stretch.xml" > "$out/scenes/stretch_${c//,/x}.xml"
-  scene "stretch_${c//,/x}_1x2" "$out/scenes/stretch_${c//,/x}.xml" 1 2
+  xml="$out/scenes/stretch_${c//,/x}.xml"
+  sed "s/{32, 32, 64}/{$c}/" "$repo/inputs/stretch.xml" > "$xml"
+  if [ $first -eq 0 ]; then
+    sed -i 's/<Parameter name="Steps" type="int" value="12"\/>/<Parameter name="Steps" type="int" value="3"\/>/; s/{0, 0, -1.2}/{0, 0, -0.3}/; s/{0, 0, 1.2}/{0, 0, 0.3}/' "$xml"
+  fi
+  first=0
+  scene "stretch_${c//,/x}_1x2" "$xml" 1 2
 done
 
 log "report"

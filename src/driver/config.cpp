@@ -1,6 +1,9 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/core/validation.hpp>
 #include <sinew/driver/config.hpp>
+#include <sinew/io/output.hpp>
+#include <sinew/scenes/scene.hpp>
+#include <sinew/solver/nonlinear_solver.hpp>
 #include <sinew/materials/parameters.hpp>
 
 #include <Teuchos_ParameterList.hpp>
@@ -107,6 +110,23 @@ SceneConfig make_scene(Teuchos::RCP<Teuchos::ParameterList> params, const std::s
     throw e.prefixed(name + ": ");
   }
   return scene;
+}
+
+std::string parameter_reference() {
+  std::ostringstream os;
+  auto section = [&](const std::string& title, const Teuchos::ParameterList& l) {
+    os << "== " << title << " ==\n";
+    l.print(os, Teuchos::ParameterList::PrintOptions().indent(2).showTypes(true).showDoc(true));
+    os << "\n";
+  };
+  section("top level", valid_top_level());
+  section("Mesh", valid_mesh_parameters());
+  section("Material", valid_material_parameters());
+  section("Loading", valid_loading_parameters());
+  section("Loading / Boundary conditions / <name>", valid_boundary_condition_parameters());
+  section("Solver (plus sublists 'NOX' and 'Stratimikos' passed to Trilinos)", valid_solver_parameters());
+  section("Output", valid_output_parameters());
+  return os.str();
 }
 
 std::string describe(const SceneConfig& scene) {

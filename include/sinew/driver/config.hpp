@@ -25,6 +25,9 @@ SceneConfig read_scene(const std::string& path);
 // Validates a parameter list already in memory; `name` stands for the file in messages.
 SceneConfig make_scene(Teuchos::RCP<Teuchos::ParameterList> params, const std::string& name);
 
+// Every accepted entry of a scene file, with defaults and documentation (sinew --parameters).
+std::string parameter_reference();
+
 // Human-readable summary of a scene for the start of a run.
 std::string describe(const SceneConfig& scene);
 
