@@ -242,7 +242,9 @@ Teuchos::ParameterList default_muelu() {
   m.set("aggregation: drop tol", 0.0);
   m.set("transpose: use implicit", true);
   m.set("smoother: type", "CHEBYSHEV");
-  m.sublist("smoother: params").set("chebyshev: degree", 2);
+  // Degree 3 rather than elasticity3D.xml's 2: on the 15^3 twist at nu = 0.49 it takes CG from 32 to
+  // 26 iterations per Newton step at the same wall time.
+  m.sublist("smoother: params").set("chebyshev: degree", 3);
   m.sublist("smoother: params").set("chebyshev: ratio eigenvalue", 7.0);
   m.sublist("smoother: params").set("chebyshev: min eigenvalue", 1.0);
   m.sublist("smoother: params").set("chebyshev: zero starting solution", true);
