@@ -86,7 +86,19 @@ double solve_lateral(const Model& m, double s) {
       fd = psi(d);
     }
   }
-  return 0.5 * (a + b);
+  // A minimum located by comparing energies is only accurate to sqrt(eps) in t; polish it with Newton
+  // steps on the lateral stress P_yy(t) = 0, kept only while they reduce |P_yy|.
+  double t = 0.5 * (a + b);
+  auto Pyy = [&](double x) { return m.pk1(Mat3::diag(s, x, x))(1, 1); };
+  for (int it = 0; it < 8; ++it) {
+    const double f = Pyy(t), h = 1e-7 * std::max(t, 1e-6);
+    const double df = (Pyy(t + h) - Pyy(t - h)) / (2.0 * h);
+    if (!(std::fabs(df) > 0.0)) break;
+    const double tn = t - f / df;
+    if (!(tn > 0.0) || !(std::fabs(Pyy(tn)) < std::fabs(f))) break;
+    t = tn;
+  }
+  return t;
 }
 
 int run(int argc, char** argv) {
@@ -200,7 +212,9 @@ int run(int argc, char** argv) {
   if (!plot_file.empty()) {
     if (out_file.empty()) throw InputError("--plot needs --output FILE.csv");
     file.close();
-    const std::string cmd = "python3 \"" SINEW_SOURCE_DIR "/scripts/plot_material.py\" \"" + out_file + "\" \"" +
+    // Debian's python3 carries python3-matplotlib (scripts/deps.sh); another python3 earlier in PATH may not.
+    const std::string py = std::ifstream("/usr/bin/python3").good() ? "/usr/bin/python3" : "python3";
+    const std::string cmd = py + " \"" SINEW_SOURCE_DIR "/scripts/plot_material.py\" \"" + out_file + "\" \"" +
                             plot_file + "\" \"" + describe(spec) + "\"";
     if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed (is python3-matplotlib installed?)");
   }
