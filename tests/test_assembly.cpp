@@ -6,6 +6,7 @@
 
 #include <sinew/algebra/elastic_system.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/core/hash.hpp>
 
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Tpetra_Core.hpp>
@@ -51,13 +52,7 @@ void set_displacement(const ElasticSystem& sys, Vector& u, Fn&& fn) {
 }
 
 // Deterministic pseudo-random number in [-1, 1] from a node id and component (same on every rank).
-double hash_unit(long long gid, int c, int salt = 0) {
-  std::uint64_t x = static_cast<std::uint64_t>(gid) * 3 + c + 0x9E3779B97F4A7C15ull * (salt + 1);
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  x ^= x >> 31;
-  return 2.0 * (static_cast<double>(x >> 11) / 9007199254740992.0) - 1.0;
-}
+double hash_unit(long long gid, int c, int salt = 0) { return 2.0 * unit_hash(gid, c, salt + 1) - 1.0; }
 
 // Dense copy of a distributed matrix on every rank (small test matrices only), via columns K e_j.
 std::vector<std::vector<double>> dense(const CrsMatrix& K) {

@@ -2,6 +2,8 @@
 // threads CTest gives it) and over MPI ranks, compared with plain serial evaluation.
 #include "material_test_utils.hpp"
 
+#include <sinew/core/hash.hpp>
+
 #include <Kokkos_Core.hpp>
 #include <Tpetra_Core.hpp>
 #include <Tpetra_Map.hpp>
@@ -14,17 +16,10 @@ using namespace sinew;
 
 namespace {
 
-// Deterministic F for global index i (splitmix64), the same on every rank and thread.
-KOKKOS_INLINE_FUNCTION double unit_hash(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  x ^= x >> 31;
-  return static_cast<double>(x >> 11) * (1.0 / 9007199254740992.0);
-}
+// Deterministic F for global index i, the same on every rank and thread.
 KOKKOS_INLINE_FUNCTION Mat3 deformation(std::int64_t i) {
   Mat3 F = Mat3::identity();
-  for (int k = 0; k < 9; ++k) F[k] += 1.2 * (unit_hash(static_cast<std::uint64_t>(9 * i + k)) - 0.5);
+  for (int k = 0; k < 9; ++k) F[k] += 1.2 * (unit_hash(i, k, 1) - 0.5);
   if (i % 5 == 0) F.set_col(2, Vec3{{-F(0, 2), -F(1, 2), -F(2, 2)}});  // some inverted ones
   return F;
 }

@@ -1,4 +1,5 @@
 #include <sinew/core/errors.hpp>
+#include <sinew/core/hash.hpp>
 #include <sinew/core/validation.hpp>
 #include <sinew/discretization/mesh.hpp>
 
@@ -170,13 +171,8 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
         Xh(l, 2) = spec.lower[2] + k * dx[2];
         const bool on_box = i == 0 || i == pat.nx || j == 0 || j == pat.ny || k == 0 || k == nz;
         if (spec.jitter > 0.0 && !on_box) {
-          for (int d = 0; d < 3; ++d) {  // deterministic in the global id: the same on every rank
-            std::uint64_t x = static_cast<std::uint64_t>(m.node_gid[l]) * 3 + d + 0x9E3779B97F4A7C15ull * spec.jitter_seed;
-            x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-            x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-            x ^= x >> 31;
-            Xh(l, d) += spec.jitter * dx[d] * (2.0 * (static_cast<double>(x >> 11) / 9007199254740992.0) - 1.0);
-          }
+          for (int d = 0; d < 3; ++d)  // deterministic in the global id: the same on every rank
+            Xh(l, d) += spec.jitter * dx[d] * (2.0 * unit_hash(m.node_gid[l], d, spec.jitter_seed) - 1.0);
         }
       }
   }

@@ -1,4 +1,5 @@
 #include <sinew/core/errors.hpp>
+#include <sinew/core/hash.hpp>
 #include <sinew/core/validation.hpp>
 #include <sinew/scenes/scene.hpp>
 
@@ -224,11 +225,7 @@ void Scene::initial_state(Vector& u) const {
   auto v = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
   for (std::size_t n = 0; n < m.n_owned_nodes; ++n) {
     for (int c = 0; c < 3; ++c) {
-      std::uint64_t x = static_cast<std::uint64_t>(m.node_gid[n]) * 3 + c + 0x9E3779B97F4A7C15ull * scramble_seed_;
-      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-      x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-      x ^= x >> 31;
-      const double r = static_cast<double>(x >> 11) / 9007199254740992.0;  // [0, 1)
+      const double r = unit_hash(m.node_gid[n], c, static_cast<int>(scramble_seed_));
       const double mid = 0.5 * (m.lower[c] + m.upper[c]), half = 0.5 * f * (m.upper[c] - m.lower[c]);
       v(3 * n + c, 0) = mid + (2.0 * r - 1.0) * half - X_(n, c);
     }
