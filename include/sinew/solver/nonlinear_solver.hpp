@@ -57,6 +57,7 @@ class NonlinearSolver {
   void set_interrupt(std::function<bool()> interrupt);
 
  private:
+  SolveReport solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
