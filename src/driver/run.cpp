@@ -113,13 +113,7 @@ int Simulation::run() {
         std::fflush(stdout);
       };
       const SolveReport r = solver.solve(*trial, progress);
-      rec.solve.newton_iterations += r.newton_iterations;
-      rec.solve.linear_iterations += r.linear_iterations;
-      rec.solve.seconds_assembly += r.seconds_assembly;
-      rec.solve.seconds_preconditioner += r.seconds_preconditioner;
-      rec.solve.seconds_linear += r.seconds_linear;
-      rec.solve.seconds_line_search += r.seconds_line_search;
-      rec.solve.seconds_total += r.seconds_total;
+      rec.solve.accumulate(r);
       if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
       rec.solve.final_residual = r.final_residual;
       if (r.converged) {

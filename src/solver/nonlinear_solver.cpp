@@ -471,13 +471,7 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
     impl_->model->exact_below = 0.0;
     SolveReport second = solve_once(u, progress);
     impl_->model->exact_below = exact_below;
-    second.newton_iterations += first.newton_iterations;
-    second.linear_iterations += first.linear_iterations;
-    second.seconds_assembly += first.seconds_assembly;
-    second.seconds_preconditioner += first.seconds_preconditioner;
-    second.seconds_linear += first.seconds_linear;
-    second.seconds_line_search += first.seconds_line_search;
-    second.seconds_total += first.seconds_total;
+    second.accumulate(first);
     return second;
   }
   return solve_once(u, progress);

@@ -37,6 +37,17 @@ struct SolveReport {
   double initial_residual = 0.0, final_residual = 0.0;
   double seconds_assembly = 0.0, seconds_preconditioner = 0.0, seconds_linear = 0.0, seconds_line_search = 0.0,
          seconds_total = 0.0;
+
+  // Adds the iteration counts and times of a later attempt at the same step.
+  void accumulate(const SolveReport& r) {
+    newton_iterations += r.newton_iterations;
+    linear_iterations += r.linear_iterations;
+    seconds_assembly += r.seconds_assembly;
+    seconds_preconditioner += r.seconds_preconditioner;
+    seconds_linear += r.seconds_linear;
+    seconds_line_search += r.seconds_line_search;
+    seconds_total += r.seconds_total;
+  }
 };
 
 class NonlinearSolver {
