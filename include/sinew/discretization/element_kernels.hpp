@@ -6,6 +6,7 @@
 // execution space. Heavy: include only in the assembly translation units.
 #pragma once
 
+#include <sinew/discretization/elements.hpp>
 #include <sinew/materials/material.hpp>
 
 #include <Kokkos_Core.hpp>
@@ -22,7 +23,6 @@ struct AssemblyTotals {
 // Everything a kernel reads and writes, independent of the material model.
 template <class LocalMatrix>
 struct AssemblyViews {
-  using exec_memory = Kokkos::HostSpace;
   Kokkos::View<const int**> conn;
   Kokkos::View<const double***> dNdX;
   Kokkos::View<const double*> wdetJ;
@@ -70,11 +70,9 @@ struct ElasticKernel {
 
   KOKKOS_INLINE_FUNCTION static void shape_values(int q, double N[NPE]) {
     if constexpr (NPE == 8) {
-      const double g = 0.57735026918962576451;
-      const double xi[3] = {(q & 1) ? g : -g, (q & 2) ? g : -g, (q & 4) ? g : -g};
-      const double s[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                              {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-      for (int a = 0; a < 8; ++a) N[a] = 0.125 * (1 + s[a][0] * xi[0]) * (1 + s[a][1] * xi[1]) * (1 + s[a][2] * xi[2]);
+      double xi[3];
+      hex8_gauss_point(q, xi);
+      hex8_shape_values(xi, N);
     } else {
       for (int a = 0; a < NPE; ++a) N[a] = 1.0 / NPE;
     }

@@ -109,16 +109,11 @@ struct SigmaEigensystem {
 
   // Smallest eigenvalue of the exact Hessian (for diagnostics and the material-point tool).
   KOKKOS_INLINE_FUNCTION double min_eigenvalue() const {
-    double S[9], ev[3], Q[9];
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) S[3 * a + b] = A[a][b];
-    jacobi_eigen<3>(S, ev, Q);
+    double ev[9];
+    Mat3 Q[9];
+    eigenpairs(ev, Q);
     double m = ev[0];
-    for (int k = 0; k < 3; ++k) {
-      m = ev[k] < m ? ev[k] : m;
-      m = twist[k] < m ? twist[k] : m;
-      m = flip[k] < m ? flip[k] : m;
-    }
+    for (int k = 1; k < 9; ++k) m = ev[k] < m ? ev[k] : m;
     return m;
   }
 };
