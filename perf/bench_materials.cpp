@@ -21,11 +21,8 @@ KOKKOS_INLINE_FUNCTION Mat3 sample_F(int i) {
 template <class Exec>
 void bench(benchmark::State& state, MaterialModel model) {
   const int n = static_cast<int>(state.range(0));
-  MaterialSpec spec;
-  spec.model = model;
-  spec.mu_L = 1.0;
-  spec.lambda_L = 24.5;
-  spec.kikuuwe_kappa = 1e4;
+  MaterialSpec spec = material_defaults(model, 1.0, 24.5);
+  options_of<StVKKikuuwe>(spec).kappa = 1e4;
   Kokkos::View<double*, typename Exec::memory_space> out("out", n);
   with_material(spec, [&](auto m) {
     for (auto _ : state) {

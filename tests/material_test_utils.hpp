@@ -1,7 +1,7 @@
 // Shared helpers for material tests: random deformation gradients, finite differences, LAPACK eigen.
 #pragma once
 
-#include <sinew/materials/models.hpp>
+#include <sinew/materials/parameters.hpp>
 
 #include <Teuchos_LAPACK.hpp>
 
@@ -147,14 +147,8 @@ inline Mat9 lapack_projected(const Mat9& H, Projection p) {
 // Every model of the library at one (E, nu), with the default model parameters.
 inline std::vector<MaterialSpec> all_models(double E, double nu) {
   std::vector<MaterialSpec> out;
-  for (std::size_t k = 0; k < material_model_names().size(); ++k) {
-    MaterialSpec s;
-    s.model = static_cast<MaterialModel>(k);
-    s.mu_L = E / (2.0 * (1.0 + nu));
-    s.lambda_L = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-    s.kikuuwe_kappa = 1e4 * E;
-    out.push_back(s);
-  }
+  for (std::size_t k = 0; k < material_model_names().size(); ++k)
+    out.push_back(material_defaults(static_cast<MaterialModel>(k), E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))));
   return out;
 }
 

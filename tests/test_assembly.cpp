@@ -256,9 +256,8 @@ TEST(Assembly, MatrixIsJacobianOfForceAndProjectionIsPsd) {
       for (std::size_t i = 0; i < n; ++i)
         for (std::size_t k = 0; k < n; ++k) ASSERT_NEAR(D[i][k], D[k][i], 1e-12 * scale);
       // The clamped projection of the same state is PSD even where the exact matrix is not.
-      sys.set_projection(Projection::Clamp);
       auto Kp = sys.create_matrix();
-      sys.evaluate(*u, nullptr, Kp.get());
+      sys.evaluate(*u, nullptr, Kp.get(), Backend::Default, Projection::Clamp);
       const double lmin = min_eigenvalue(dense(*Kp));
       EXPECT_GE(lmin, -1e-12 * scale) << to_string(spec.model);
     }
@@ -273,8 +272,7 @@ TEST(Assembly, ClampedEqualsExactWhereNothingIsClamped) {
   u->putScalar(0.0);
   auto K0 = sys.create_matrix(), K1 = sys.create_matrix();
   sys.evaluate(*u, nullptr, K0.get());
-  sys.set_projection(Projection::Clamp);
-  sys.evaluate(*u, nullptr, K1.get());
+  sys.evaluate(*u, nullptr, K1.get(), Backend::Default, Projection::Clamp);
   const auto a = dense(*K0), b = dense(*K1);
   double d = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i)

@@ -1,38 +1,61 @@
-// Internal: the typed entry points of the element kernels, one translation unit per element type so
-// that the per-model instantiations compile in parallel.
+// Internal: the typed entry points of the element loop on Tpetra's local objects, one translation unit
+// per element type so that the per-model instantiations compile in parallel.
 #pragma once
 
 #include <sinew/algebra/elastic_system.hpp>
-#include <sinew/discretization/element_kernels.hpp>
+#include <sinew/discretization/element_kernel.hpp>
 
 #include <Tpetra_CrsMatrix_decl.hpp>
 
 namespace sinew::detail {
 
+using MemorySpace = Kokkos::DefaultExecutionSpace::memory_space;
 using LocalMatrix = CrsMatrix::local_matrix_device_type;
-using Views = AssemblyViews<LocalMatrix>;
+using Target = CrsTarget<LocalMatrix, Kokkos::View<double*, MemorySpace>>;
 
-template <class Exec>
-AssemblyTotals assemble_hex8(const MaterialSpec& spec, const Views& v, int n_elements);
-template <class Exec>
-AssemblyTotals assemble_tet4(const MaterialSpec& spec, const Views& v, int n_elements);
+// Everything one evaluation reads and writes, whatever the law.
+struct AssemblyRequest {
+  ElementGeometry<MemorySpace> geometry;
+  Kokkos::View<const double*, MemorySpace> u;
+  Target target;
+  bool want_force = false, want_matrix = false;
+  ElementFields<MemorySpace> fields;
+  double body[3] = {0.0, 0.0, 0.0};
+};
 
-template <class Exec, int NPE, int NQP>
-AssemblyTotals assemble_with(const MaterialSpec& spec, const Views& v, int n_elements) {
-  return with_material(spec, [&](auto model) {
-    ElasticKernel<decltype(model), NPE, NQP, LocalMatrix> kernel{model, v};
+// The element loop over `elements` (local ids, all of one law) on execution space Exec.
+template <class Exec>
+AssemblyTotals assemble_hex8(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
+                             const AssemblyRequest& r);
+template <class Exec>
+AssemblyTotals assemble_tet4(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
+                             const AssemblyRequest& r);
+
+template <class Exec, class Element>
+AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
+                             const AssemblyRequest& r) {
+  return with_material(law, [&](auto model) {
+    ElementLoop<Element, decltype(model), Target> loop;
+    loop.model = model;
+    loop.projection = projection;
+    loop.geometry = r.geometry;
+    loop.elements = elements;
+    loop.u = r.u;
+    for (int i = 0; i < 3; ++i) loop.body[i] = r.body[i];
+    loop.target = r.target;
+    loop.want_force = r.want_force;
+    loop.want_matrix = r.want_matrix;
+    loop.fields = r.fields;
     AssemblyTotals t;
-    Kokkos::parallel_reduce("sinew::element_kernel", Kokkos::RangePolicy<Exec>(0, n_elements), kernel, t);
+    Kokkos::parallel_reduce("sinew::element_loop", Kokkos::RangePolicy<Exec>(0, static_cast<int>(elements.extent(0))), loop, t);
     return t;
   });
 }
 
 }  // namespace sinew::detail
 
-// Explicit instantiation for the default execution space and, when it differs, Serial.
-#if defined(KOKKOS_ENABLE_SERIAL)
-#define SINEW_INSTANTIATE_SERIAL(fn)                                                                    \
-  template sinew::AssemblyTotals fn<Kokkos::Serial>(const sinew::MaterialSpec&, const sinew::detail::Views&, int);
-#else
-#define SINEW_INSTANTIATE_SERIAL(fn)
-#endif
+// Instantiations: the default execution space, and Serial when it differs (the backend comparison).
+#define SINEW_INSTANTIATE_ASSEMBLY(fn, Exec)                                                                          \
+  template sinew::AssemblyTotals fn<Exec>(const sinew::MaterialSpec&, sinew::Projection,                             \
+                                          const Kokkos::View<const int*, sinew::detail::MemorySpace>&, \
+                                          const sinew::detail::AssemblyRequest&);

@@ -1,14 +1,15 @@
+// The hex8 element loop, instantiated for every material model (see assembly.hpp).
 #include "assembly.hpp"
 
 namespace sinew::detail {
 template <class Exec>
-AssemblyTotals assemble_hex8(const MaterialSpec& spec, const Views& v, int n_elements) {
-  return assemble_with<Exec, 8, 8>(spec, v, n_elements);
+AssemblyTotals assemble_hex8(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
+                             const AssemblyRequest& r) {
+  return assemble_with<Exec, Hex8>(law, projection, elements, r);
 }
-template AssemblyTotals assemble_hex8<Kokkos::DefaultExecutionSpace>(const MaterialSpec&, const Views&, int);
 }  // namespace sinew::detail
-#if !defined(KOKKOS_ENABLE_SERIAL) || !defined(KOKKOS_ENABLE_OPENMP)
-// Serial is the default execution space, already instantiated.
-#else
-SINEW_INSTANTIATE_SERIAL(sinew::detail::assemble_hex8)
+
+SINEW_INSTANTIATE_ASSEMBLY(sinew::detail::assemble_hex8, Kokkos::DefaultExecutionSpace)
+#if defined(KOKKOS_ENABLE_SERIAL) && defined(KOKKOS_ENABLE_OPENMP)
+SINEW_INSTANTIATE_ASSEMBLY(sinew::detail::assemble_hex8, Kokkos::Serial)
 #endif

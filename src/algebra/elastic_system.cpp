@@ -1,6 +1,9 @@
+// ElasticSystem: maps, graph, material blocks, the evaluation (element loop + Dirichlet elimination +
+// reductions) and MueLu's rigid-body modes.
 #include "assembly.hpp"
 
 #include <sinew/core/errors.hpp>
+#include <sinew/core/parameters.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
 #include <Tpetra_CrsGraph.hpp>
@@ -10,6 +13,7 @@
 #include <Tpetra_Vector.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 namespace sinew {
 
@@ -29,8 +33,37 @@ std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t cou
 
 }  // namespace
 
-ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialSpec& material)
-    : comm_(std::move(comm)), mesh_(std::move(mesh)), material_(material) {
+ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials)
+    : comm_(std::move(comm)), mesh_(std::move(mesh)) {
+  // Blocks of elements by law: the default law first, then one per region, in the order given.
+  const std::size_t ne = mesh_.local_elements();
+  std::vector<int> block_of(ne, 0);
+  std::vector<MaterialSpec> laws{materials.default_law};
+  for (const auto& [name, law] : materials.regions) {
+    const auto& names = mesh_.element_group_names;
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+      std::string msg = "Material: '" + name + "' is not a volume group of the mesh; ";
+      msg += names.empty() ? std::string("the mesh has none") : "its volume groups are " + or_list(names);
+      const std::string near = closest_name(name, names);
+      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+      throw InputError(msg);
+    }
+    const int group = static_cast<int>(it - names.begin());
+    for (std::size_t e = 0; e < ne; ++e)
+      if (!mesh_.element_group.empty() && mesh_.element_group[e] == group) block_of[e] = static_cast<int>(laws.size());
+    laws.push_back(law);
+  }
+  for (std::size_t b = 0; b < laws.size(); ++b) {
+    std::vector<int> ids;
+    for (std::size_t e = 0; e < ne; ++e)
+      if (block_of[e] == static_cast<int>(b)) ids.push_back(static_cast<int>(e));
+    Block blk{laws[b], Kokkos::View<int*>("block elements", ids.size())};
+    auto h = Kokkos::create_mirror_view(blk.elements);
+    for (std::size_t k = 0; k < ids.size(); ++k) h(k) = ids[k];
+    Kokkos::deep_copy(blk.elements, h);
+    blocks_.push_back(blk);
+  }
   elements_ = compute_element_data(mesh_, *comm_);
 
   const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
@@ -79,6 +112,12 @@ ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh m
 
 ElasticSystem::~ElasticSystem() = default;
 
+double ElasticSystem::stiffness_scale() const {
+  double s = 0.0;
+  for (const auto& b : blocks_) s = std::max(s, b.law.mu_L + std::fabs(b.law.lambda_L));
+  return s;
+}
+
 Teuchos::RCP<CrsMatrix> ElasticSystem::create_matrix() const { return Teuchos::rcp(new CrsMatrix(graph_)); }
 Teuchos::RCP<Vector> ElasticSystem::create_vector() const { return Teuchos::rcp(new Vector(owned_dofs_)); }
 
@@ -86,6 +125,7 @@ void ElasticSystem::set_fixed_dofs(const std::vector<int>& overlap_dofs) {
   auto h = Kokkos::create_mirror_view(fixed_);
   Kokkos::deep_copy(h, 0);
   fixed_owned_.clear();
+  any_fixed_ = !overlap_dofs.empty();
   const int n_owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
   for (int d : overlap_dofs) {
     if (d < 0 || static_cast<std::size_t>(d) >= h.extent(0)) throw std::out_of_range("set_fixed_dofs: bad DOF index");
@@ -104,21 +144,23 @@ std::size_t ElasticSystem::global_fixed_dofs() const {
 
 void ElasticSystem::set_body_force(const std::array<double, 3>& f) { body_ = f; }
 
-EvaluationTotals ElasticSystem::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend) const {
-  return run(u, force, K, backend, false, {}, {});
+EvaluationTotals ElasticSystem::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend,
+                                         std::optional<Projection> projection) const {
+  return run(u, force, K, backend, projection, {});
 }
 
 void ElasticSystem::element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const {
-  Kokkos::View<double*> p("elem_psi", mesh_.n_owned_elements), j("elem_J", mesh_.n_owned_elements);
-  run(u, nullptr, nullptr, Backend::Default, true, p, j);
-  auto ph = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), p);
-  auto jh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), j);
+  ElementFields<detail::MemorySpace> fields{Kokkos::View<double*>("elem_psi", mesh_.n_owned_elements),
+                                            Kokkos::View<double*>("elem_J", mesh_.n_owned_elements)};
+  run(u, nullptr, nullptr, Backend::Default, std::nullopt, fields);
+  auto ph = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fields.psi);
+  auto jh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fields.J);
   psi.assign(ph.data(), ph.data() + ph.extent(0));
   J.assign(jh.data(), jh.data() + jh.extent(0));
 }
 
-EvaluationTotals ElasticSystem::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, bool fields,
-                                    Kokkos::View<double*> psi, Kokkos::View<double*> J) const {
+EvaluationTotals ElasticSystem::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend,
+                                    std::optional<Projection> projection, ElementFields<detail::MemorySpace> fields) const {
   u_overlap_->doImport(u, *importer_, Tpetra::INSERT);
   if (force) force->putScalar(0.0);
   if (K) {
@@ -126,45 +168,41 @@ EvaluationTotals ElasticSystem::run(const Vector& u, Vector* force, CrsMatrix* K
     K->setAllToScalar(0.0);
   }
   AssemblyTotals t;
+  t.min_J = HUGE_VAL;
   {
-    detail::Views v;
-    v.conn = mesh_.conn;
-    v.dNdX = elements_.dNdX;
-    v.wdetJ = elements_.wdetJ;
+    detail::AssemblyRequest r;
+    r.geometry = element_geometry(mesh_, elements_);
     auto u_view = u_overlap_->getLocalViewDevice(Tpetra::Access::ReadOnly);
-    v.u = Kokkos::subview(u_view, Kokkos::ALL(), 0);
-    v.fixed = fixed_;
+    r.u = Kokkos::subview(u_view, Kokkos::ALL(), 0);
     Kokkos::View<double**, Kokkos::LayoutLeft, Vector::device_type> f_view;
     if (force) {
       f_view = force->getLocalViewDevice(Tpetra::Access::ReadWrite);
-      v.force = Kokkos::subview(f_view, Kokkos::ALL(), 0);
+      r.target.force = Kokkos::subview(f_view, Kokkos::ALL(), 0);
     }
-    if (K) {
-      v.matrix = K->getLocalMatrixDevice();
-      v.want_matrix = true;
-    }
-    if (fields) {
-      v.elem_psi = psi;
-      v.elem_J = J;
-    }
-    v.n_owned_elements = static_cast<int>(mesh_.n_owned_elements);
-    v.n_owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
-    for (int i = 0; i < 3; ++i) v.body[i] = body_[i];
-    v.projection = material_.projection;
-    const int ne = static_cast<int>(mesh_.local_elements());
+    if (K) r.target.matrix = K->getLocalMatrixDevice();
+    r.target.owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
+    r.want_force = force != nullptr;
+    r.want_matrix = K != nullptr;
+    r.fields = fields;
+    for (int i = 0; i < 3; ++i) r.body[i] = body_[i];
     const bool hex = mesh_.type == ElementType::Hex8;
-#if defined(KOKKOS_ENABLE_SERIAL)
-    if (backend == Backend::Serial) {
-      t = hex ? detail::assemble_hex8<Kokkos::Serial>(material_, v, ne) : detail::assemble_tet4<Kokkos::Serial>(material_, v, ne);
-    } else
+    for (const Block& b : blocks_) {
+      if (b.elements.extent(0) == 0) continue;
+      const Projection p = projection.value_or(b.law.projection);
+#if defined(KOKKOS_ENABLE_SERIAL) && defined(KOKKOS_ENABLE_OPENMP)
+      if (backend == Backend::Serial) {
+        t.add(hex ? detail::assemble_hex8<Kokkos::Serial>(b.law, p, b.elements, r)
+                  : detail::assemble_tet4<Kokkos::Serial>(b.law, p, b.elements, r));
+        continue;
+      }
 #endif
-    {
       (void)backend;
-      t = hex ? detail::assemble_hex8<Kokkos::DefaultExecutionSpace>(material_, v, ne)
-              : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(material_, v, ne);
+      t.add(hex ? detail::assemble_hex8<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, r)
+                : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, r));
     }
     Kokkos::fence();
   }
+  eliminate_dirichlet(force, K);
   if (K) K->fillComplete(owned_dofs_, owned_dofs_);
 
   EvaluationTotals g;
@@ -180,6 +218,33 @@ EvaluationTotals ElasticSystem::run(const Vector& u, Vector* force, CrsMatrix* K
   g.inverted = gcounts[0];
   g.undefined = gcounts[1];
   return g;
+}
+
+void ElasticSystem::eliminate_dirichlet(Vector* force, CrsMatrix* K) const {
+  // Ghost DOFs count too: a rank with no fixed row may still have fixed columns.
+  if (!any_fixed_) return;
+  const auto fixed = fixed_;
+  const int rows = static_cast<int>(3 * mesh_.n_owned_nodes);
+  if (force) {
+    auto f = force->getLocalViewDevice(Tpetra::Access::ReadWrite);
+    Kokkos::parallel_for(
+        "sinew::dirichlet_force", Kokkos::RangePolicy<>(0, rows), KOKKOS_LAMBDA(const int r) {
+          if (fixed(r)) f(r, 0) = 0.0;
+        });
+  }
+  if (K) {
+    const auto A = K->getLocalMatrixDevice();
+    // Local column indices are overlap DOF indices (the graph's column map is the overlap map).
+    Kokkos::parallel_for(
+        "sinew::dirichlet_matrix", Kokkos::RangePolicy<>(0, rows), KOKKOS_LAMBDA(const int r) {
+          const bool row_fixed = fixed(r) != 0;
+          for (auto k = A.graph.row_map(r); k < A.graph.row_map(r + 1); ++k) {
+            const int c = A.graph.entries(k);
+            if ((row_fixed || fixed(c)) && c != r) A.values(k) = 0.0;
+          }
+        });
+  }
+  Kokkos::fence();
 }
 
 Teuchos::RCP<MultiVector> ElasticSystem::coordinates() const {

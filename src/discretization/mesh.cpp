@@ -1,10 +1,6 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
-#include <sinew/core/validation.hpp>
 #include <sinew/discretization/mesh.hpp>
-
-#include <Teuchos_Array.hpp>
-#include <Teuchos_ParameterList.hpp>
 
 #include <cmath>
 #include <sstream>
@@ -13,64 +9,19 @@ namespace sinew {
 
 std::string to_string(ElementType t) { return t == ElementType::Hex8 ? "hex8" : "tet4"; }
 
-Teuchos::ParameterList valid_mesh_parameters() {
-  Teuchos::ParameterList v("Mesh");
-  v.set("Type", std::string("box"), "box | cylinder (voxelized, axis along z)");
-  v.set("Element", std::string("hex8"), "hex8 (2x2x2 Gauss) | tet4 (each hex split into 6 tets, 1 point)");
-  v.set("Elements", Teuchos::Array<int>({4, 4, 4}), "cells along x, y, z (cylinder: across the diameter, across, along)");
-  v.set("Lower corner", Teuchos::Array<double>({0.0, 0.0, 0.0}), "box: lower corner");
-  v.set("Upper corner", Teuchos::Array<double>({1.0, 1.0, 1.0}), "box: upper corner");
-  v.set("Radius", 0.5, "cylinder: radius");
-  v.set("Length", 1.0, "cylinder: length along z (from z = 0)");
-  v.set("Jitter", 0.0, "move nodes not on the bounding box at random by up to this many cell sizes");
-  v.set("Jitter seed", 1, "seed of the jitter");
-  return v;
-}
-
-MeshSpec mesh_from_parameters(const Teuchos::ParameterList& in) {
-  const Teuchos::ParameterList valid = valid_mesh_parameters();
-  require_known_entries(in, valid, "Mesh");
-  auto get_arr = [&](const char* key, auto def) {
-    using A = decltype(def);
-    return in.isParameter(key) ? in.get<A>(key) : valid.get<A>(key);
-  };
+MeshSpec lattice_spec(const MeshParameters& p) {
   MeshSpec s;
-  s.shape = get_or<std::string>(in, "Type", "box");
-  if (s.shape != "box" && s.shape != "cylinder")
-    throw InputError("Mesh: 'Type' must be box or cylinder, got \"" + s.shape + "\"");
-  const std::string el = get_or<std::string>(in, "Element", "hex8");
-  if (el == "hex8")
-    s.element = ElementType::Hex8;
-  else if (el == "tet4")
-    s.element = ElementType::Tet4;
-  else
-    throw InputError("Mesh: 'Element' must be hex8 or tet4, got \"" + el + "\"");
-  const auto n = get_arr("Elements", Teuchos::Array<int>());
-  if (n.size() != 3) throw InputError("Mesh: 'Elements' needs 3 entries, got " + std::to_string(n.size()));
-  for (int k = 0; k < 3; ++k) {
-    if (n[k] < 1 || n[k] > 100000)
-      throw InputError("Mesh: 'Elements' entries must lie in [1, 100000], got " + std::to_string(n[k]));
-    s.cells[k] = n[k];
-  }
-  s.jitter = get_or<double>(in, "Jitter", 0.0);
-  s.jitter_seed = get_or<int>(in, "Jitter seed", 1);
-  if (!(s.jitter >= 0.0 && s.jitter < 10.0)) throw InputError("Mesh: 'Jitter' must lie in [0, 10)");
-  if (s.shape == "box") {
-    const auto lo = get_arr("Lower corner", Teuchos::Array<double>()), hi = get_arr("Upper corner", Teuchos::Array<double>());
-    if (lo.size() != 3) throw InputError("Mesh: 'Lower corner' needs 3 entries");
-    if (hi.size() != 3) throw InputError("Mesh: 'Upper corner' needs 3 entries");
-    for (int k = 0; k < 3; ++k) {
-      s.lower[k] = lo[k];
-      s.upper[k] = hi[k];
-      if (!(hi[k] > lo[k]) || !std::isfinite(lo[k]) || !std::isfinite(hi[k]))
-        throw InputError("Mesh: 'Upper corner' must exceed 'Lower corner' in every coordinate");
-    }
+  s.shape = p.type;
+  s.element = p.element;
+  s.cells = p.cells;
+  s.jitter = p.jitter;
+  s.jitter_seed = p.jitter_seed;
+  if (p.type == "box") {
+    s.lower = p.lower;
+    s.upper = p.upper;
   } else {
-    const double R = get_or<double>(in, "Radius", 0.5), L = get_or<double>(in, "Length", 1.0);
-    if (!(R > 0.0) || !std::isfinite(R)) throw InputError("Mesh: 'Radius' must be positive");
-    if (!(L > 0.0) || !std::isfinite(L)) throw InputError("Mesh: 'Length' must be positive");
-    s.lower = {-R, -R, 0.0};
-    s.upper = {R, R, L};
+    s.lower = {-p.radius, -p.radius, 0.0};
+    s.upper = {p.radius, p.radius, p.length};
   }
   return s;
 }

@@ -1,12 +1,16 @@
-// sinew: run a quasi-static scene described by a Teuchos XML parameter list.
+// sinew: run a quasi-static scene described by a Teuchos XML parameter list. The command line is
+// checked completely before MPI and Kokkos start, so that a bad value is a message and exit code 2,
+// never a crash inside a library.
 #include <sinew/core/errors.hpp>
 #include <sinew/driver/config.hpp>
+#include <sinew/driver/exit_codes.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/driver/signals.hpp>
 
 #include <Tpetra_Core.hpp>
 
+#include <cerrno>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -17,7 +21,7 @@ const char* kUsage =
     "usage: sinew [options] SCENE.xml\n"
     "\n"
     "Runs the quasi-static scene described by the Teuchos XML parameter list SCENE.xml\n"
-    "(see inputs/ for shipped scenes and docs/ for the parameters).\n"
+    "(see inputs/ for shipped scenes; sinew --parameters lists every entry).\n"
     "\n"
     "options:\n"
     "  --version, --info      print versions, Kokkos backends, threads, MPI ranks, HDF5, and exit\n"
@@ -26,83 +30,114 @@ const char* kUsage =
     "  --quiet                no progress lines\n"
     "  --output DIR           write results to DIR (overrides Output/Directory)\n"
     "  --restart FILE         continue the run from a checkpoint (DIR/checkpoint.h5) of the same scene\n"
-    "  --kokkos-threads=N     OpenMP threads per rank (or set OMP_NUM_THREADS)\n"
+    "  --kokkos-threads=N     OpenMP threads per rank, 1 to 4096 (or set OMP_NUM_THREADS)\n"
     "  -h, --help             this text\n"
     "\n"
     "exit codes: 0 done, 1 error, 2 bad command line, 3 bad input, 4 a step did not converge,\n"
-    "            128 + N stopped by signal N (SIGINT, SIGTERM) after writing a checkpoint\n";
+    "            128 + N stopped by signal N (SIGINT, SIGTERM) after writing a checkpoint;\n"
+    "            a second SIGINT/SIGTERM exits at once (the last checkpoint stays)\n";
 
-int rank_of_world() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
+struct CommandLine {
+  std::string scene, restart, output;
+  bool info = false, check = false, quiet = false, help = false, parameters = false;
+};
+
+// The rank the MPI launcher gave this process, before MPI is initialized (so only one prints).
+bool launcher_rank_zero() {
+  for (const char* v : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"})
+    if (const char* r = std::getenv(v)) return std::string(r) == "0";
+  return true;
+}
+
+bool positive_int(const std::string& s, long lo, long hi) {
+  if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 9) return false;
+  const long v = std::strtol(s.c_str(), nullptr, 10);
+  return v >= lo && v <= hi;
+}
+
+// Returns "" when the command line is good, else why not.
+std::string parse(int argc, char** argv, CommandLine& cl) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--version" || a == "--info") {
+      cl.info = true;
+    } else if (a == "--parameters") {
+      cl.parameters = true;
+    } else if (a == "--check") {
+      cl.check = true;
+    } else if (a == "--quiet") {
+      cl.quiet = true;
+    } else if (a == "-h" || a == "--help") {
+      cl.help = true;
+    } else if (a == "--restart" || a == "--output") {
+      if (i + 1 >= argc || argv[i + 1][0] == '\0') return a + " needs a value";
+      (a == "--restart" ? cl.restart : cl.output) = argv[++i];
+    } else if (a.rfind("--kokkos-threads=", 0) == 0 || a.rfind("--kokkos-num-threads=", 0) == 0) {
+      const std::string v = a.substr(a.find('=') + 1);
+      if (!positive_int(v, 1, 4096)) return "'" + a + "': the number of threads must be a whole number from 1 to 4096";
+    } else if (a == "--kokkos-threads" || a == "--kokkos-num-threads") {
+      return "'" + a + "' needs a value: " + a + "=N";
+    } else if (!a.empty() && a[0] == '-') {
+      return "unknown option '" + a + "'";
+    } else if (cl.scene.empty()) {
+      cl.scene = a;
+    } else {
+      return "more than one scene file given ('" + cl.scene + "', '" + a + "')";
+    }
+  }
+  // Kokkos and the OpenMP runtime read these; a bad value must not reach them.
+  for (const char* var : {"OMP_NUM_THREADS", "KOKKOS_NUM_THREADS"})
+    if (const char* v = std::getenv(var)) {
+      const std::string s = v;
+      const std::string first = s.substr(0, s.find(','));  // OMP_NUM_THREADS may list nesting levels
+      if (!positive_int(first, 1, 4096))
+        return std::string(var) + "='" + s + "' is not a number of threads from 1 to 4096";
+    }
+  if (!cl.help && !cl.parameters && !cl.info && cl.scene.empty()) return "no scene file given";
+  return "";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  using sinew::ExitCode;
+  CommandLine cl;
+  const std::string bad = parse(argc, argv, cl);
+  const bool speaker = launcher_rank_zero();
+  if (!bad.empty()) {
+    if (speaker) std::cerr << "sinew: " << bad << "\n\n" << kUsage;
+    return sinew::code(ExitCode::Usage);
+  }
+  if (cl.help) {
+    if (speaker) std::cout << kUsage;
+    return 0;
+  }
+  if (cl.parameters) {
+    if (speaker) std::cout << sinew::parameter_reference();
+    return 0;
+  }
   // Spread OpenMP threads over cores unless the user chose otherwise (Kokkos warns when unset).
   setenv("OMP_PROC_BIND", "spread", 0);
   setenv("OMP_PLACES", "threads", 0);
   // Kokkos and MPI live exactly as long as this guard; no Kokkos/Tpetra object may outlive it.
   Tpetra::ScopeGuard scope(&argc, &argv);
-  const bool root = rank_of_world() == 0;
-  std::string scene_path;
-  bool info = false, check = false, quiet = false;
-  std::string restart, output;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--version" || a == "--info") {
-      info = true;
-    } else if (a == "--parameters") {
-      if (root) std::cout << sinew::parameter_reference();
-      return 0;
-    } else if (a == "--check") {
-      check = true;
-    } else if (a == "--quiet") {
-      quiet = true;
-    } else if (a == "--restart" || a == "--output") {
-      if (i + 1 >= argc) {
-        if (root) std::cerr << "sinew: " << a << " needs a value\n";
-        return 2;
-      }
-      (a == "--restart" ? restart : output) = argv[++i];
-    } else if (a == "-h" || a == "--help") {
-      if (root) std::cout << kUsage;
-      return 0;
-    } else if (!a.empty() && a[0] == '-') {
-      if (root) std::cerr << "sinew: unknown option '" << a << "'\n\n" << kUsage;
-      return 2;
-    } else if (scene_path.empty()) {
-      scene_path = a;
-    } else {
-      if (root) std::cerr << "sinew: more than one scene file given ('" << scene_path << "', '" << a << "')\n";
-      return 2;
-    }
-  }
-  if (info) {
+  const bool root = Tpetra::getDefaultComm()->getRank() == 0;
+  if (cl.info) {
     if (root) std::cout << sinew::build_info();
     return 0;
   }
-  if (scene_path.empty()) {
-    if (root) std::cout << kUsage;
-    return 2;
-  }
-  try {
-    sinew::SceneConfig scene = sinew::read_scene(scene_path);
-    if (!output.empty()) scene.params->sublist("Output").set("Directory", output);
-    if (check) {
+  return sinew::run_guarded(root, [&] {
+    sinew::SceneConfig scene = sinew::read_scene(cl.scene);
+    if (!cl.output.empty()) scene.params.output.directory = cl.output;
+    if (cl.check) {
       if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
       return 0;
     }
     sinew::install_signal_handlers();
-    return sinew::run_scene(scene, sinew::RunOptions{quiet, restart});
-  } catch (const sinew::InputError& e) {
-    if (root) std::cerr << "sinew: input error [" << sinew::to_string(e.kind) << "]: " << e.what() << "\n";
-    return 3;
-  } catch (const std::exception& e) {
-    if (root) std::cerr << "sinew: error: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+    sinew::RunOptions options;
+    options.quiet = cl.quiet;
+    options.restart_file = cl.restart;
+    sinew::Simulation sim(scene, options);
+    return sim.run();
+  });
 }

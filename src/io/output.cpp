@@ -1,12 +1,17 @@
+// Output: collective parallel HDF5 with checked closes, durable renames, and failures agreed on by all
+// ranks; the XDMF index; the CSV log; checkpoints that record where the load path stood.
 #include <sinew/core/errors.hpp>
-#include <sinew/core/validation.hpp>
 #include <sinew/io/output.hpp>
 
+#include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
-#include <Tpetra_Import.hpp>
 #include <Tpetra_Vector.hpp>
 #include <hdf5.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -16,15 +21,6 @@ namespace sinew {
 
 namespace fs = std::filesystem;
 
-Teuchos::ParameterList valid_output_parameters() {
-  Teuchos::ParameterList v("Output");
-  v.set("Directory", std::string(""), "results folder (default results/<Scene>)");
-  v.set("Every", 1, "write fields every this many steps (the last step is always written)");
-  v.set("HDF5", true, "write HDF5/XDMF fields (the CSV log is always written)");
-  v.set("Checkpoint every", 1, "write DIR/checkpoint.h5 every this many steps (0: never); sinew --restart continues from it");
-  return v;
-}
-
 namespace {
 
 MPI_Comm raw_comm(const Teuchos::Comm<int>& comm) {
@@ -32,19 +28,82 @@ MPI_Comm raw_comm(const Teuchos::Comm<int>& comm) {
   return MPI_COMM_SELF;
 }
 
-// Thin RAII for HDF5 handles; every failure becomes an exception naming the file.
-struct H5 {
-  hid_t id;
-  herr_t (*close)(hid_t);
-  H5(hid_t i, herr_t (*c)(hid_t), const std::string& what) : id(i), close(c) {
-    if (id < 0) throw std::runtime_error("HDF5: " + what + " failed");
+// Runs fn on every rank, then agrees: when any rank threw, every rank throws the lowest failing rank's
+// error (an InputError keeps its kind). Keeps a failure on one rank (a rename on rank 0, a full disk)
+// from leaving the others waiting in the next collective call.
+template <class Fn>
+void collectively(MPI_Comm comm, Fn&& fn) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  std::string msg;
+  int kind = -1;  // -1: not an InputError
+  int failed = size;
+  try {
+    fn();
+  } catch (const InputError& e) {
+    msg = e.what();
+    kind = static_cast<int>(e.kind);
+    failed = rank;
+  } catch (const std::exception& e) {
+    msg = e.what();
+    failed = rank;
+  }
+  int first = size;
+  MPI_Allreduce(&failed, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return;
+  int len = static_cast<int>(msg.size());
+  MPI_Bcast(&len, 1, MPI_INT, first, comm);
+  MPI_Bcast(&kind, 1, MPI_INT, first, comm);
+  msg.resize(len);
+  MPI_Bcast(msg.data(), len, MPI_CHAR, first, comm);
+  if (kind >= 0) throw InputError(msg, static_cast<InputErrorKind>(kind));
+  throw std::runtime_error(msg);
+}
+
+// HDF5 handle; close() reports a failure (a flush that did not reach the disk), the destructor only
+// cleans up on error paths.
+class H5 {
+ public:
+  H5(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close), what_(what) {
+    if (id_ < 0) throw std::runtime_error("HDF5: " + what + " failed");
   }
   ~H5() {
-    if (id >= 0) close(id);
+    if (id_ >= 0) close_(id_);
   }
   H5(const H5&) = delete;
   H5& operator=(const H5&) = delete;
+  hid_t id() const { return id_; }
+  void close() {
+    const herr_t r = close_(id_);
+    id_ = -1;
+    if (r < 0) throw std::runtime_error("HDF5: closing " + what_ + " failed");
+  }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+  std::string what_;
 };
+
+// Silences HDF5's own error printing while reading a file that may be bad (we report errors ourselves),
+// and restores the previous handler afterwards.
+class QuietHdf5 {
+ public:
+  QuietHdf5() {
+    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
+
+ private:
+  H5E_auto2_t func_ = nullptr;
+  void* data_ = nullptr;
+};
+
+void check(herr_t r, const std::string& what) {
+  if (r < 0) throw std::runtime_error("HDF5: " + what + " failed");
+}
 
 // Collective write of rows [first, first + count) of a rows x cols dataset.
 template <class T>
@@ -53,65 +112,87 @@ void write_rows(hid_t file, const std::string& name, hid_t type, long long rows,
   hsize_t dims[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
   const int rank = cols == 1 ? 1 : 2;
   H5 space(H5Screate_simple(rank, dims, nullptr), H5Sclose, fname + ": dataspace " + name);
-  H5 dset(H5Dcreate2(file, name.c_str(), type, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+  H5 dset(H5Dcreate2(file, name.c_str(), type, space.id(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
           fname + ": create " + name);
   hsize_t start[2] = {static_cast<hsize_t>(first), 0}, cnt[2] = {static_cast<hsize_t>(count), static_cast<hsize_t>(cols)};
   H5 mem(H5Screate_simple(rank, cnt, nullptr), H5Sclose, fname + ": memspace " + name);
-  if (count > 0)
-    H5Sselect_hyperslab(space.id, H5S_SELECT_SET, start, nullptr, cnt, nullptr);
-  else {
-    H5Sselect_none(space.id);
-    H5Sselect_none(mem.id);
+  if (count > 0) {
+    check(H5Sselect_hyperslab(space.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), "selecting rows of " + name);
+  } else {
+    H5Sselect_none(space.id());
+    H5Sselect_none(mem.id());
   }
   H5 dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose, "transfer properties");
-  H5Pset_dxpl_mpio(dxpl.id, H5FD_MPIO_COLLECTIVE);
-  if (H5Dwrite(dset.id, type, mem.id, space.id, dxpl.id, data) < 0)
-    throw std::runtime_error("HDF5: writing " + name + " to " + fname + " failed");
+  H5Pset_dxpl_mpio(dxpl.id(), H5FD_MPIO_COLLECTIVE);
+  check(H5Dwrite(dset.id(), type, mem.id(), space.id(), dxpl.id(), data), "writing " + name + " to " + fname);
+  dset.close();
 }
 
 void write_attribute(hid_t file, const char* name, double value) {
   H5 space(H5Screate(H5S_SCALAR), H5Sclose, "attribute space");
-  H5 attr(H5Acreate2(file, name, H5T_NATIVE_DOUBLE, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "attribute");
-  H5Awrite(attr.id, H5T_NATIVE_DOUBLE, &value);
+  H5 attr(H5Acreate2(file, name, H5T_NATIVE_DOUBLE, space.id(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "attribute");
+  check(H5Awrite(attr.id(), H5T_NATIVE_DOUBLE, &value), std::string("writing attribute ") + name);
+  attr.close();
 }
 
-// Opens (creates) an HDF5 file for collective parallel writing.
+// Creates an HDF5 file for collective parallel writing.
 hid_t create_parallel(const std::string& path, MPI_Comm comm) {
   H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
-  H5Pset_fapl_mpio(fapl.id, comm, MPI_INFO_NULL);
-  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.id);
-  if (f < 0) throw std::runtime_error("HDF5: cannot create " + path);
-  return f;
+  H5Pset_fapl_mpio(fapl.id(), comm, MPI_INFO_NULL);
+  return H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.id());
+}
+
+// fsync a file or folder by path.
+void sync_path(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
+  if (fd < 0) throw std::runtime_error("cannot open " + path + " to flush it to disk");
+  const int r = ::fsync(fd);
+  ::close(fd);
+  if (r != 0 && !directory) throw std::runtime_error("flushing " + path + " to disk failed");
+}
+
+// Puts a finished file in place durably: its data on disk first, then the rename, then the folder.
+void replace_durably(const std::string& tmp, const std::string& path) {
+  sync_path(tmp, false);
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
+  const fs::path dir = fs::path(path).parent_path();
+  sync_path(dir.empty() ? "." : dir.string(), true);
+}
+
+// Writes an HDF5 file aside with `fill` (collective), closes it checking the flush, and renames it into
+// place on rank 0; any failure on any rank is an error on every rank and the old file stays.
+template <class Fill>
+void write_file(const std::string& path, MPI_Comm comm, bool root, Fill&& fill) {
+  const std::string tmp = path + ".tmp";
+  collectively(comm, [&] {
+    H5 file(create_parallel(tmp, comm), H5Fclose, "creating " + tmp);
+    fill(file.id(), tmp);
+    file.close();
+  });
+  collectively(comm, [&] {
+    if (root) replace_durably(tmp, path);
+  });
 }
 
 }  // namespace
 
-Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file, int restart_step)
-    : scene_(scene), name_(scene.name()) {
-  const auto& comm = *scene.system().comm();
-  root_ = comm.getRank() == 0;
+Output::Output(const OutputParameters& params, const ElasticSystem& system, const std::string& name, int steps,
+               int restart_step)
+    : params_(params), sys_(system), name_(name), steps_(steps) {
+  root_ = system.comm()->getRank() == 0;
+  dir_ = params.directory.empty() ? "results/" + name_ : params.directory;
   try {
-    require_known_entries(params, valid_output_parameters(), "Output");
-  } catch (const InputError& e) {
-    throw e.prefixed(scene_file + ": ");
-  }
-  dir_ = get_or<std::string>(params, "Directory", "");
-  if (dir_.empty()) dir_ = "results/" + name_;
-  every_ = get_or<int>(params, "Every", 1);
-  if (every_ < 1) throw InputError(scene_file + ": Output: 'Every' must be at least 1");
-  hdf5_ = get_or<bool>(params, "HDF5", true);
-  checkpoint_every_ = get_or<int>(params, "Checkpoint every", 1);
-  if (checkpoint_every_ < 0) throw InputError(scene_file + ": Output: 'Checkpoint every' must be >= 0");
-  int ok = 1;
-  std::string err;
-  if (root_) {
-    std::error_code ec;
-    fs::create_directories(dir_, ec);
-    if (ec) {
-      ok = 0;
-      err = ec.message();
-    } else {
-      // On restart keep the rows of the steps before the checkpoint (a row written after it belongs to
+    collectively(raw_comm(*system.comm()), [&] {
+      if (!root_) return;
+      std::error_code ec;
+      fs::create_directories(dir_, ec);
+      if (ec) throw InputError("Output: cannot create results folder '" + dir_ + "': " + ec.message(), InputErrorKind::File);
+      // Files a crash left half-written: never read, so remove them.
+      for (const auto& entry : fs::directory_iterator(dir_, ec))
+        if (entry.path().extension() == ".tmp") fs::remove(entry.path(), ec);
+      // On restart keep the rows of the steps up to the checkpoint (a row written after it belongs to
       // a step that will be computed again).
       std::vector<std::string> keep;
       if (restart_step >= 0) {
@@ -122,24 +203,21 @@ Output::Output(const Teuchos::ParameterList& params, const Scene& scene, const s
             if (!line.empty() && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
       }
       log_.open(dir_ + "/log.csv", std::ios::trunc);
-      if (!log_) {
-        ok = 0;
-        err = "cannot write " + dir_ + "/log.csv";
-      } else {
-        log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
-                "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
-                "seconds_total\n";
-        for (const auto& l : keep) log_ << l << "\n";
-        log_.flush();
-      }
-    }
+      if (!log_) throw InputError("Output: cannot create results folder '" + dir_ + "': cannot write log.csv", InputErrorKind::File);
+      log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
+              "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
+              "seconds_total\n";
+      for (const auto& l : keep) log_ << l << "\n";
+      log_.flush();
+    });
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const InputError*>(&e)) throw;
+    throw InputError(e.what(), InputErrorKind::File);
   }
-  Teuchos::broadcast(comm, 0, &ok);
-  if (!ok) throw InputError(scene_file + ": Output: cannot create results folder '" + dir_ + "': " + err, InputErrorKind::File);
   // Step files already on disk from before the restart point belong to the run's history.
-  if (restart_step >= 0 && hdf5_)
+  if (restart_step >= 0 && params_.hdf5)
     for (int k = 0; k <= restart_step; ++k)
-      if (fs::exists(step_file(k))) written_.emplace_back(k, static_cast<double>(k) / scene.steps());
+      if (fs::exists(step_file(k))) written_.emplace_back(k, static_cast<double>(k) / steps_);
 }
 
 std::string Output::step_file(int step) const {
@@ -149,11 +227,8 @@ std::string Output::step_file(int step) const {
 }
 
 void Output::write_mesh() {
-  if (!hdf5_) return;
-  const ElasticSystem& sys = scene_.system();
-  const Mesh& m = sys.mesh();
-  MPI_Comm comm = raw_comm(*sys.comm());
-  const std::string path = dir_ + "/mesh.h5", tmp = path + ".tmp";
+  if (!params_.hdf5) return;
+  const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes), e_owned = static_cast<long long>(m.n_owned_elements);
   const long long first_node = n_owned > 0 ? m.node_gid[0] : 0, first_el = e_owned > 0 ? m.element_gid[0] : 0;
   // Slab partitions own contiguous ranges of global ids: checked, since the hyperslabs rely on it.
@@ -168,23 +243,18 @@ void Output::write_mesh() {
   std::vector<long long> conn(npe * e_owned);
   for (long long e = 0; e < e_owned; ++e)
     for (int a = 0; a < npe; ++a) conn[npe * e + a] = m.node_gid[C(e, a)];
-  {
-    H5 file(create_parallel(tmp, comm), H5Fclose, "create " + tmp);
-    write_rows(file.id, "/coordinates", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, xyz.data(), tmp);
-    write_rows(file.id, "/connectivity", H5T_NATIVE_LLONG, m.global_elements, npe, first_el, e_owned, conn.data(), tmp);
-  }
-  MPI_Barrier(comm);
-  if (root_) fs::rename(tmp, path);
-  MPI_Barrier(comm);
+  write_file(dir_ + "/mesh.h5", raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
+    write_rows(file, "/coordinates", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, xyz.data(), tmp);
+    write_rows(file, "/connectivity", H5T_NATIVE_LLONG, m.global_elements, npe, first_el, e_owned, conn.data(), tmp);
+  });
 }
 
 void Output::write_step(int step, double load, const Vector& u) {
-  if (!hdf5_) return;
-  const ElasticSystem& sys = scene_.system();
-  const Mesh& m = sys.mesh();
-  MPI_Comm comm = raw_comm(*sys.comm());
+  if (!params_.hdf5) return;
+  const Mesh& m = sys_.mesh();
+  MPI_Comm comm = raw_comm(*sys_.comm());
   std::vector<double> psi, J;
-  sys.element_fields(u, psi, J);
+  sys_.element_fields(u, psi, J);
   const long long n_owned = static_cast<long long>(m.n_owned_nodes), e_owned = static_cast<long long>(m.n_owned_elements);
   const long long first_node = n_owned > 0 ? m.node_gid[0] : 0, first_el = e_owned > 0 ? m.element_gid[0] : 0;
   auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
@@ -195,25 +265,22 @@ void Output::write_step(int step, double load, const Vector& u) {
       disp[3 * n + d] = uv(3 * n + d, 0);
       pos[3 * n + d] = X(n, d) + uv(3 * n + d, 0);
     }
-  const std::string path = step_file(step), tmp = path + ".tmp";
-  {
-    H5 file(create_parallel(tmp, comm), H5Fclose, "create " + tmp);
-    write_rows(file.id, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
-    write_rows(file.id, "/position", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, pos.data(), tmp);
-    write_rows(file.id, "/J", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, J.data(), tmp);
-    write_rows(file.id, "/energy_density", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, psi.data(), tmp);
-    write_attribute(file.id, "load", load);
-    write_attribute(file.id, "step", step);
-  }
-  MPI_Barrier(comm);
-  if (root_) fs::rename(tmp, path);
+  write_file(step_file(step), comm, root_, [&](hid_t file, const std::string& tmp) {
+    write_rows(file, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
+    write_rows(file, "/position", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, pos.data(), tmp);
+    write_rows(file, "/J", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, J.data(), tmp);
+    write_rows(file, "/energy_density", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, psi.data(), tmp);
+    write_attribute(file, "load", load);
+    write_attribute(file, "step", step);
+  });
   written_.emplace_back(step, load);
-  if (root_) write_xdmf();
-  MPI_Barrier(comm);
+  collectively(comm, [&] {
+    if (root_) write_xdmf();
+  });
 }
 
 void Output::write_xdmf() const {
-  const Mesh& m = scene_.system().mesh();
+  const Mesh& m = sys_.mesh();
   const int npe = nodes_per_element(m.type);
   const std::string topo = m.type == ElementType::Hex8 ? "Hexahedron" : "Tetrahedron";
   std::ostringstream x;
@@ -247,9 +314,10 @@ void Output::write_xdmf() const {
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << x.str();
+    out.close();
     if (!out) throw std::runtime_error("cannot write " + tmp);
   }
-  fs::rename(tmp, path);
+  replace_durably(tmp, path);
 }
 
 void Output::log(const StepRecord& r) {
@@ -263,80 +331,92 @@ void Output::log(const StepRecord& r) {
   log_.flush();
 }
 
-void Output::write_checkpoint(int step, double load, const Vector& u) {
-  const ElasticSystem& sys = scene_.system();
-  const Mesh& m = sys.mesh();
-  MPI_Comm comm = raw_comm(*sys.comm());
+void Output::write_checkpoint(const LoadState& at, const Vector& u) {
+  const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes);
   const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
   auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
   std::vector<double> disp(uv.data(), uv.data() + 3 * n_owned);
-  const std::string path = checkpoint_file(), tmp = path + ".tmp";
-  {
-    H5 file(create_parallel(tmp, comm), H5Fclose, "create " + tmp);
-    write_rows(file.id, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
-    write_attribute(file.id, "step", step);
-    write_attribute(file.id, "load", load);
-    write_attribute(file.id, "global_nodes", static_cast<double>(m.global_nodes));
-    write_attribute(file.id, "steps", scene_.steps());
-  }
-  MPI_Barrier(comm);
   // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one.
-  if (root_) fs::rename(tmp, path);
-  MPI_Barrier(comm);
+  write_file(checkpoint_file(), raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
+    write_rows(file, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
+    write_attribute(file, "step", at.step);
+    write_attribute(file, "load", at.load);
+    write_attribute(file, "increment", at.increment);
+    write_attribute(file, "cuts", at.cuts);
+    write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
+    write_attribute(file, "steps", steps_);
+  });
 }
 
-Output::Checkpoint Output::read_checkpoint(const std::string& path, const Scene& scene, Vector& u) {
-  const ElasticSystem& sys = scene.system();
+LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& sys, int steps, Vector& u) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());
-  int exists = fs::exists(path) ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &exists, 1, MPI_INT, MPI_MIN, comm);
-  if (!exists) throw InputError("restart file '" + path + "' does not exist", InputErrorKind::File);
-  H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
-  H5Pset_fapl_mpio(fapl.id, comm, MPI_INFO_NULL);
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report errors ourselves
-  const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id);
-  if (fid < 0) throw InputError("restart file '" + path + "' is not a readable HDF5 file", InputErrorKind::File);
-  H5 file(fid, H5Fclose, "open " + path);
-  auto attribute = [&](const char* name) {
-    double v = -1.0;
-    const hid_t a = H5Aopen(file.id, name, H5P_DEFAULT);
-    if (a < 0) throw InputError("restart file '" + path + "' has no '" + name + "' attribute", InputErrorKind::File);
-    H5Aread(a, H5T_NATIVE_DOUBLE, &v);
-    H5Aclose(a);
-    return v;
-  };
-  Checkpoint c;
-  c.step = static_cast<int>(attribute("step"));
-  c.load = attribute("load");
-  const long long nodes = static_cast<long long>(attribute("global_nodes"));
-  if (nodes != m.global_nodes)
-    throw InputError("restart file '" + path + "' was written for a mesh of " + std::to_string(nodes) +
-                         " nodes; this scene has " + std::to_string(m.global_nodes),
-                     InputErrorKind::File);
-  const int steps = static_cast<int>(attribute("steps"));
-  if (steps != scene.steps())
-    throw InputError("restart file '" + path + "' was written for " + std::to_string(steps) +
-                         " load steps; this scene has " + std::to_string(scene.steps()),
-                     InputErrorKind::File);
-  const long long n_owned = static_cast<long long>(m.n_owned_nodes);
-  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
-  H5 dset(H5Dopen2(file.id, "/displacement", H5P_DEFAULT), H5Dclose, path + ": /displacement");
-  H5 space(H5Dget_space(dset.id), H5Sclose, "dataspace");
-  hsize_t start[2] = {static_cast<hsize_t>(first_node), 0}, cnt[2] = {static_cast<hsize_t>(n_owned), 3};
-  H5 mem(H5Screate_simple(2, cnt, nullptr), H5Sclose, "memspace");
-  if (n_owned > 0) {
-    H5Sselect_hyperslab(space.id, H5S_SELECT_SET, start, nullptr, cnt, nullptr);
-  } else {
-    H5Sselect_none(space.id);
-    H5Sselect_none(mem.id);
-  }
-  std::vector<double> disp(3 * n_owned);
-  if (H5Dread(dset.id, H5T_NATIVE_DOUBLE, mem.id, space.id, H5P_DEFAULT, disp.data()) < 0)
-    throw InputError("restart file '" + path + "': cannot read /displacement", InputErrorKind::File);
-  auto uv = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
-  for (long long i = 0; i < 3 * n_owned; ++i) uv(i, 0) = disp[i];
+  LoadState c;
+  const std::string where = "restart file '" + path + "'";
+  auto fail = [&](const std::string& why) { throw InputError(where + ": " + why, InputErrorKind::File); };
+  collectively(comm, [&] {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) fail("does not exist");
+    if (!fs::is_regular_file(path, ec)) fail("is not a regular file");
+    QuietHdf5 quiet;
+    if (H5Fis_hdf5(path.c_str()) <= 0) fail("is not an HDF5 file");
+    H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
+    H5Pset_fapl_mpio(fapl.id(), comm, MPI_INFO_NULL);
+    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());
+    if (fid < 0) fail("is not a readable HDF5 file");
+    H5 file(fid, H5Fclose, "open " + path);
+    auto attribute = [&](const char* name, double lo, double hi) {
+      if (H5Aexists(file.id(), name) <= 0) fail(std::string("has no '") + name + "' attribute (not a Sinew checkpoint?)");
+      H5 a(H5Aopen(file.id(), name, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
+      H5 space(H5Aget_space(a.id()), H5Sclose, "attribute space");
+      if (H5Sget_simple_extent_npoints(space.id()) != 1) fail(std::string("attribute '") + name + "' is not a scalar");
+      double v = NAN;
+      if (H5Aread(a.id(), H5T_NATIVE_DOUBLE, &v) < 0) fail(std::string("cannot read attribute '") + name + "'");
+      if (!std::isfinite(v) || v < lo || v > hi)
+        fail(std::string("attribute '") + name + "' = " + std::to_string(v) + " is out of range (corrupt file?)");
+      return v;
+    };
+    const long long nodes = static_cast<long long>(attribute("global_nodes", 0, 1e15));
+    if (nodes != m.global_nodes)
+      fail("was written for a mesh of " + std::to_string(nodes) + " nodes; this scene has " + std::to_string(m.global_nodes));
+    const int file_steps = static_cast<int>(attribute("steps", 1, 1e9));
+    if (file_steps != steps)
+      fail("was written for " + std::to_string(file_steps) + " load steps; this scene has " + std::to_string(steps));
+    const double step = attribute("step", 0, steps);
+    c.step = static_cast<int>(step);
+    if (c.step != step) fail("attribute 'step' is not a whole number (corrupt file?)");
+    c.load = attribute("load", 0.0, 1.0);
+    // Checkpoints written before cut steps were recorded lack these: they were taken at step ends.
+    c.increment = H5Aexists(file.id(), "increment") > 0 ? attribute("increment", 0.0, 1.0) : 0.0;
+    c.cuts = H5Aexists(file.id(), "cuts") > 0 ? static_cast<int>(attribute("cuts", 0, 64)) : 0;
+    if (c.load < static_cast<double>(c.step) / steps - 1e-12 || c.load > static_cast<double>(c.step + 1) / steps + 1e-12)
+      fail("load " + std::to_string(c.load) + " does not lie within step " + std::to_string(c.step + 1) + " (corrupt file?)");
+    if (H5Lexists(file.id(), "/displacement", H5P_DEFAULT) <= 0) fail("has no /displacement dataset");
+    H5 dset(H5Dopen2(file.id(), "/displacement", H5P_DEFAULT), H5Dclose, path + ": /displacement");
+    H5 space(H5Dget_space(dset.id()), H5Sclose, "dataspace");
+    hsize_t dims[2] = {0, 0};
+    if (H5Sget_simple_extent_ndims(space.id()) != 2 || H5Sget_simple_extent_dims(space.id(), dims, nullptr) != 2 ||
+        dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
+      fail("/displacement does not have the shape nodes x 3 of this mesh");
+    const long long n_owned = static_cast<long long>(m.n_owned_nodes);
+    const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
+    hsize_t start[2] = {static_cast<hsize_t>(first_node), 0}, cnt[2] = {static_cast<hsize_t>(n_owned), 3};
+    H5 mem(H5Screate_simple(2, cnt, nullptr), H5Sclose, "memspace");
+    if (n_owned > 0) {
+      H5Sselect_hyperslab(space.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+    } else {
+      H5Sselect_none(space.id());
+      H5Sselect_none(mem.id());
+    }
+    std::vector<double> disp(3 * n_owned);
+    if (H5Dread(dset.id(), H5T_NATIVE_DOUBLE, mem.id(), space.id(), H5P_DEFAULT, disp.data()) < 0)
+      fail("cannot read /displacement");
+    for (double d : disp)
+      if (!std::isfinite(d)) fail("/displacement holds non-finite values (corrupt file?)");
+    auto uv = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
+    for (long long i = 0; i < 3 * n_owned; ++i) uv(i, 0) = disp[i];
+  });
   return c;
 }
 

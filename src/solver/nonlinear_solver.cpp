@@ -1,6 +1,7 @@
-// NOX + Thyra + Stratimikos + Belos + MueLu: the only translation unit that includes them.
+// NOX + Thyra + Stratimikos + Belos + MueLu: the only translation unit that includes them. The pieces
+// NOX calls back (model evaluator, energy merit, energy line search, observer) share one SolveState per
+// solve: the Hessian policy and the last evaluation's totals.
 #include <sinew/core/errors.hpp>
-#include <sinew/core/validation.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 
 #include <NOX.H>
@@ -22,9 +23,8 @@
 #include <Tpetra_CrsMatrix.hpp>
 #include <Tpetra_Vector.hpp>
 
-#include <chrono>
-#include <map>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace sinew {
@@ -36,9 +36,18 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 
 using Extract = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, NodeType>;
 
+// What one solve's callbacks share.
+struct SolveState {
+  HessianPolicy policy;
+  EvaluationTotals last;     // the most recent evaluation
+  double last_f_norm = 0.0;  // |F| of the most recent residual evaluation
+  double seconds_assembly = 0.0;
+};
+
 // ---------------------------------------------------------------------------------------------
 // The model: x = nodal displacements (Dirichlet entries prescribed), f = dE/du (zero in Dirichlet
-// rows), W = the (projected) stiffness with Dirichlet rows and columns eliminated.
+// rows), W = the stiffness with Dirichlet rows and columns eliminated, projected or exact as the
+// solve's Hessian policy says.
 // ---------------------------------------------------------------------------------------------
 class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
  public:
@@ -57,10 +66,16 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     out_ = out;
     nominal_ = in_;
     nominal_.set_x(x0_);
-    energy_scale = (sys.material().mu_L + std::fabs(sys.material().lambda_L)) * sys.reference_volume();
+    energy_scale_ = sys.stiffness_scale() * sys.reference_volume();
   }
 
   void set_W_factory(const Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>>& f) { factory_ = f; }
+  // The solve whose state the callbacks update (owned by NonlinearSolver::solve_once).
+  void attach(SolveState* state) { state_ = state; }
+  SolveState& state() const { return *state_; }
+  // Size of the terms summed into the total energy, (mu_L + lambda_L) times the reference volume: the
+  // scale of its round-off, which does not shrink with the total near rest.
+  double energy_scale() const { return energy_scale_; }
 
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_x_space() const override { return space_; }
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_f_space() const override { return space_; }
@@ -74,14 +89,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
   double energy(const Thyra::VectorBase<double>& x) const {
     const auto t0 = Clock::now();
     const double e = sys_.evaluate(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(x)), nullptr, nullptr).energy;
-    seconds_assembly += since(t0);
+    state_->seconds_assembly += since(t0);
     return e;
   }
-
-  mutable double seconds_assembly = 0.0;
-  mutable EvaluationTotals last;
-  // Size of the terms summed into the total energy: (mu_L + lambda_L) times the reference volume.
-  double energy_scale = 0.0;
 
  private:
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override { return out_; }
@@ -95,30 +105,18 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     if (Teuchos::nonnull(out.get_f())) f = Extract::getTpetraVector(out.get_f());
     if (Teuchos::nonnull(out.get_W_op()))
       W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
-    // Near the solution, optionally assemble the exact Hessian: projection changes the Newton matrix
-    // wherever an element is non-convex, which turns the final quadratic convergence linear. Only once
-    // no quadrature point is inverted: tangled states are where the exact Hessian is badly indefinite.
-    const Projection configured = sys_.material().projection;
-    const bool exact = W && !exact_disabled && exact_below > 0.0 && f_norm0 > 0.0 &&
-                       last_f_norm < exact_below * f_norm0 && last.inverted == 0 && last.undefined == 0;
-    if (W) last_W_exact = exact;
-    if (exact) sys_.set_projection(Projection::None);
-    last = sys_.evaluate(*u, f.get(), W.get());
-    if (exact) sys_.set_projection(configured);
-    if (f) last_f_norm = f->norm2();
-    seconds_assembly += since(t0);
+    SolveState& s = *state_;
+    std::optional<Projection> projection;
+    if (W && s.policy.next_jacobian(s.last_f_norm, s.last.inverted > 0 || s.last.undefined > 0))
+      projection = Projection::None;
+    s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection);
+    if (f) s.last_f_norm = f->norm2();
+    s.seconds_assembly += since(t0);
   }
 
- public:
-  double exact_below = 0.0;             // switch to the exact Hessian when |F| < exact_below |F0| (0: never)
-  mutable double f_norm0 = 0.0, last_f_norm = 0.0;
-  // The line search turns the exact Hessian off for the rest of a solve when its direction is no
-  // descent direction or needs a short step: the state is not yet in the quadratic region.
-  mutable bool exact_disabled = false, last_W_exact = false;
-
- private:
-
   ElasticSystem& sys_;
+  SolveState* state_ = nullptr;
+  double energy_scale_ = 0.0;
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
   Teuchos::RCP<Thyra::VectorBase<double>> x0_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> factory_;
@@ -127,14 +125,14 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
 };
 
 // Total energy as the line search's merit function: the PSD-projected Newton direction is a descent
-// direction for the energy, which is not always true for ||F||^2.
+// direction for the energy, which is not always true for ||F||^2. An undefined energy is +inf, never NaN.
 class EnergyMerit : public NOX::MeritFunction::Generic {
  public:
   explicit EnergyMerit(const ElasticModel& model) : model_(model) {}
   double computef(const NOX::Abstract::Group& grp) const override {
     const auto& x = dynamic_cast<const NOX::Thyra::Vector&>(grp.getX());
     const double e = model_.energy(x.getThyraVector());
-    return std::isfinite(e) ? e : HUGE_VAL;  // +inf (e.g. Neo-Hookean inverted) is rejected, never NaN
+    return std::isfinite(e) ? e : HUGE_VAL;
   }
   void computeGradient(const NOX::Abstract::Group& grp, NOX::Abstract::Vector& result) const override {
     result = grp.getF();
@@ -157,40 +155,54 @@ class EnergyMerit : public NOX::MeritFunction::Generic {
   std::string name_ = "Sinew total energy";
 };
 
-// Backtracking on the total energy with an Armijo condition. Near convergence the energy decrease of a
+// Backtracking on the total energy with an Armijo condition, using NOX's own "Backtrack" settings
+// (Max Iters, Minimum Step, Default Step, Reduction Factor). Near convergence the energy decrease of a
 // Newton step (about |F|^2 / stiffness) drops below the round-off of the total energy, where a pure
 // energy test would reject every step: there a step is accepted when the energy is unchanged to
-// round-off and the residual norm decreased. The round-off of the total energy is set by the size of
-// its terms (each quadrature point adds and subtracts terms of order (mu + lambda) times its volume),
-// not by the total, which is near zero close to rest.
+// round-off and the residual norm decreased.
+//
+// A direction that does not descend (slope >= 0) is never stepped along. From the exact Hessian it
+// means the state is not in the quadratic region yet: the policy falls back to projection and the
+// iteration is redone from the same state (step 0); from the projected Hessian it is a failure.
 class EnergyBacktrack : public NOX::LineSearch::Generic {
  public:
-  EnergyBacktrack(const ElasticModel& model, int max_iters, double min_step)
-      : model_(model), max_iters_(max_iters), min_step_(min_step) {}
+  EnergyBacktrack(const ElasticModel& model, Teuchos::ParameterList& bt)
+      : model_(model),
+        max_iters_(bt.get("Max Iters", 40)),
+        min_step_(bt.get("Minimum Step", 1e-12)),
+        first_step_(bt.get("Default Step", 1.0)),
+        reduction_(bt.get("Reduction Factor", 0.5)) {}
 
   bool compute(NOX::Abstract::Group& grp, double& step, const NOX::Abstract::Vector& dir,
                const NOX::Solver::Generic& s) override {
+    SolveState& state = model_.state();
     const NOX::Abstract::Group& old = s.getPreviousSolutionGroup();
     // The old group's F was computed at its x; the model's last evaluation may be elsewhere.
     const auto& xold = dynamic_cast<const NOX::Thyra::Vector&>(old.getX());
     const double E0 = model_.energy(xold.getThyraVector());
     const double slope = old.getF().innerProduct(dir);
     const double F0 = old.getNormF();
-    const bool exact = model_.last_W_exact;
-    if (exact && slope >= 0.0) model_.exact_disabled = true;
-    step = 1.0;
-    for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= 0.5) {
+    if (!(slope < 0.0)) {
+      const bool retry = state.policy.last_exact();
+      state.policy.direction_not_descent();
+      step = 0.0;
+      grp.computeX(old, dir, 0.0);
+      grp.computeF();
+      return retry;
+    }
+    step = first_step_;
+    for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= reduction_) {
       grp.computeX(old, dir, step);
-      grp.computeF();  // one assembly gives F and the energy (ElasticModel::last)
-      const double E = model_.last.energy;
-      if (!std::isfinite(E) || model_.last.undefined > 0) continue;
-      const double roundoff = 1e-11 * std::max({std::fabs(E0), std::fabs(E), model_.energy_scale});
-      if (E <= E0 + 1e-4 * step * std::min(slope, 0.0) || (std::fabs(E - E0) <= roundoff && grp.getNormF() < F0)) {
-        if (exact && step < 0.5) model_.exact_disabled = true;
+      grp.computeF();  // one assembly gives F and the energy (SolveState::last)
+      const double E = state.last.energy;
+      if (!std::isfinite(E) || state.last.undefined > 0) continue;
+      const double roundoff = 1e-11 * std::max({std::fabs(E0), std::fabs(E), model_.energy_scale()});
+      if (E <= E0 + 1e-4 * step * slope || (std::fabs(E - E0) <= roundoff && grp.getNormF() < F0)) {
+        state.policy.step_taken(step);
         return true;
       }
     }
-    if (exact) model_.exact_disabled = true;
+    state.policy.line_search_failed();
     // Failure: leave the old state in place; NOX reports the failed line search.
     step = 0.0;
     grp.computeX(old, dir, 0.0);
@@ -201,16 +213,16 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
  private:
   const ElasticModel& model_;
   int max_iters_;
-  double min_step_;
+  double min_step_, first_step_, reduction_;
 };
 
 class EnergyBacktrackFactory : public NOX::LineSearch::UserDefinedFactory {
  public:
   explicit EnergyBacktrackFactory(const ElasticModel& model) : model_(model) {}
+  // `params` is NOX's "Line Search" sublist: the user's "Backtrack" settings apply here too.
   Teuchos::RCP<NOX::LineSearch::Generic> buildLineSearch(const Teuchos::RCP<NOX::GlobalData>&,
                                                          Teuchos::ParameterList& params) const override {
-    return Teuchos::rcp(new EnergyBacktrack(model_, params.sublist("Energy Backtrack").get("Max Iters", 40),
-                                            params.sublist("Energy Backtrack").get("Minimum Step", 1e-10)));
+    return Teuchos::rcp(new EnergyBacktrack(model_, params.sublist("Backtrack")));
   }
 
  private:
@@ -223,11 +235,11 @@ class ProgressObserver : public NOX::Observer {
       : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
   void runPreLineSearch(const NOX::Solver::Generic&) override {
     t_ls_ = Clock::now();
-    asm_before_ls_ = model_.seconds_assembly;
+    asm_before_ls_ = model_.state().seconds_assembly;
   }
   void runPostLineSearch(const NOX::Solver::Generic&) override {
     // Line-search time net of the energy and residual evaluations it triggers (counted as assembly).
-    line_search_ += since(t_ls_) - (model_.seconds_assembly - asm_before_ls_);
+    line_search_ += since(t_ls_) - (model_.state().seconds_assembly - asm_before_ls_);
   }
   void runPostIterate(const NOX::Solver::Generic& solver) override {
     NewtonIterate it;
@@ -235,6 +247,7 @@ class ProgressObserver : public NOX::Observer {
     it.residual = solver.getSolutionGroup().getNormF();
     if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
+    it.exact_hessian = model_.state().policy.last_exact();
     if (cb_) cb_(it);
     if (interrupt_ && interrupt_()) throw Interrupted();
   }
@@ -340,90 +353,41 @@ void overlay(Teuchos::ParameterList& dst, const Teuchos::ParameterList& src) {
 
 }  // namespace
 
-Teuchos::ParameterList valid_solver_parameters() {
-  Teuchos::ParameterList v("Solver");
-  v.set("Absolute tolerance", 1e-2, "converged when the L2 norm of the force residual is below this (the paper's test)");
-  v.set("Relative tolerance", 0.0, "also converged when the residual norm falls below this times the step's first (0: off)");
-  v.set("Maximum iterations", 50, "Newton iterations per load step");
-  v.set("Line search", std::string("backtrack"), "backtrack | polynomial | more-thuente | full-step");
-  v.set("Line search merit", std::string("energy"), "energy (total elastic energy) | residual (0.5 |F|^2)");
-  v.set("Linear tolerance", 1e-4, "relative CG tolerance of each Newton step (Constant forcing term)");
-  v.set("Forcing term", std::string("constant"), "constant | type 1 | type 2 (Eisenstat-Walker)");
-  v.set("Preconditioner", std::string("muelu"), "muelu | none");
-  v.set("Exact Hessian below", 0.01,
-        "use the unprojected Hessian once |F| < this times the step's first |F| and nothing is inverted (0: always "
-        "project); a solve that fails that way is redone with projection");
-  v.set("Verbose", false, "print NOX's own iteration output");
-  v.sublist("NOX", false, "raw NOX parameters laid over Sinew's defaults");
-  v.sublist("Stratimikos", false, "raw Stratimikos (Belos, MueLu) parameters laid over Sinew's defaults");
-  return v;
-}
-
 struct NonlinearSolver::Impl {
   ElasticSystem& sys;
+  SolverParameters params;
   Teuchos::RCP<ElasticModel> model;
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> lowsf;
   Teuchos::RCP<Thyra::LinearOpBase<double>> W;
-  Teuchos::ParameterList nox_defaults;
-  double abs_tol = 1e-2, rel_tol = 0.0;
-  int max_iters = 50;
-  bool energy_merit = true;
-  double prec_seen = 0.0, linear_seen = 0.0;
-  std::function<bool()> interrupt;  // NOX's cumulative timers at the end of the previous solve
+  Teuchos::ParameterList nox;  // Sinew's defaults with the user's NOX list laid over them
+  double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
+  std::function<bool()> interrupt;
 
-  Impl(ElasticSystem& s, const Teuchos::ParameterList& in) : sys(s) {
-    const Teuchos::ParameterList valid = valid_solver_parameters();
-    require_known_entries(in, valid, "Solver");
-    abs_tol = get_or<double>(in, "Absolute tolerance", 1e-2);
-    rel_tol = get_or<double>(in, "Relative tolerance", 0.0);
-    max_iters = get_or<int>(in, "Maximum iterations", 50);
-    if (!(abs_tol > 0.0)) throw InputError("Solver: 'Absolute tolerance' must be positive");
-    if (!(rel_tol >= 0.0 && rel_tol < 1.0)) throw InputError("Solver: 'Relative tolerance' must lie in [0, 1)");
-    if (max_iters < 1) throw InputError("Solver: 'Maximum iterations' must be at least 1");
-    const std::string merit = get_or<std::string>(in, "Line search merit", "energy");
-    if (merit != "energy" && merit != "residual")
-      throw InputError("Solver: 'Line search merit' must be energy or residual, got \"" + merit + "\"");
-    energy_merit = merit == "energy";
-
-    nox_defaults = default_nox(s.comm()->getRank());
-    const std::string ls = get_or<std::string>(in, "Line search", "backtrack");
-    const std::map<std::string, std::string> ls_names = {
-        {"backtrack", "Backtrack"}, {"polynomial", "Polynomial"}, {"more-thuente", "More'-Thuente"}, {"full-step", "Full Step"}};
-    if (!ls_names.count(ls))
-      throw InputError("Solver: 'Line search' must be backtrack, polynomial, more-thuente or full-step; got \"" + ls + "\"");
-    nox_defaults.sublist("Line Search").set("Method", ls_names.at(ls));
-    nox_defaults.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
-    nox_defaults.sublist("Line Search").sublist("More'-Thuente").set("Recovery Step", 0.0);
-    const std::string forcing = get_or<std::string>(in, "Forcing term", "constant");
-    const std::map<std::string, std::string> f_names = {{"constant", "Constant"}, {"type 1", "Type 1"}, {"type 2", "Type 2"}};
-    if (!f_names.count(forcing))
-      throw InputError("Solver: 'Forcing term' must be constant, type 1 or type 2; got \"" + forcing + "\"");
-    auto& newton = nox_defaults.sublist("Direction").sublist("Newton");
-    newton.set("Forcing Term Method", f_names.at(forcing));
-    const double lin_tol = get_or<double>(in, "Linear tolerance", 1e-4);
-    if (!(lin_tol > 0.0 && lin_tol < 1.0)) throw InputError("Solver: 'Linear tolerance' must lie in (0, 1)");
-    newton.sublist("Linear Solver").set("Tolerance", lin_tol);
-    if (get_or<bool>(in, "Verbose", false))
-      nox_defaults.sublist("Printing").set("Output Information", NOX::Utils::Error + NOX::Utils::Warning +
-                                                                     NOX::Utils::OuterIteration + NOX::Utils::Parameters);
-    if (in.isSublist("NOX")) overlay(nox_defaults, in.sublist("NOX"));
+  Impl(ElasticSystem& s, const SolverParameters& p) : sys(s), params(p) {
+    nox = default_nox(s.comm()->getRank());
+    nox.sublist("Line Search").set("Method", p.line_search);
+    nox.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
+    nox.sublist("Line Search").sublist("More'-Thuente").set("Recovery Step", 0.0);
+    auto& newton = nox.sublist("Direction").sublist("Newton");
+    newton.set("Forcing Term Method", p.forcing);
+    newton.sublist("Linear Solver").set("Tolerance", p.linear_tolerance);
+    if (p.verbose)
+      nox.sublist("Printing").set("Output Information", NOX::Utils::Error + NOX::Utils::Warning +
+                                                            NOX::Utils::OuterIteration + NOX::Utils::Parameters);
+    overlay(nox, p.nox);
 
     auto strat = Teuchos::rcp(new Teuchos::ParameterList(default_stratimikos()));
-    const std::string prec = get_or<std::string>(in, "Preconditioner", "muelu");
-    if (prec == "none")
-      strat->set("Preconditioner Type", "None");
-    else if (prec != "muelu")
-      throw InputError("Solver: 'Preconditioner' must be muelu or none; got \"" + prec + "\"");
-    if (in.isSublist("Stratimikos")) overlay(*strat, in.sublist("Stratimikos"));
+    strat->set("Preconditioner Type", p.preconditioner);
+    overlay(*strat, p.stratimikos);
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
       auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
       // A problem no larger than the coarse size is a one-level hierarchy: the coarse solver then sees the
       // fine matrix itself, spread over all ranks, where KLU2 is wrong (repartitioning starts at level 1).
       // Use relaxation there unless the user chose the coarse solver.
-      const bool user_coarse = in.isSublist("Stratimikos") &&
-                               in.sublist("Stratimikos").isSublist("Preconditioner Types") &&
-                               in.sublist("Stratimikos").sublist("Preconditioner Types").isSublist("MueLu") &&
-                               in.sublist("Stratimikos").sublist("Preconditioner Types").sublist("MueLu").isParameter("coarse: type");
+      const Teuchos::ParameterList& user = p.stratimikos;
+      const bool user_coarse = user.isSublist("Preconditioner Types") &&
+                               user.sublist("Preconditioner Types").isSublist("MueLu") &&
+                               user.sublist("Preconditioner Types").sublist("MueLu").isParameter("coarse: type");
       const auto rows = s.owned_dofs()->getGlobalNumElements();
       if (!user_coarse && s.comm()->getSize() > 1 && rows <= static_cast<std::size_t>(mlist.get<int>("coarse: max size"))) {
         mlist.set("coarse: type", "RELAXATION");
@@ -435,11 +399,6 @@ struct NonlinearSolver::Impl {
     }
 
     model = Teuchos::rcp(new ElasticModel(s));
-    // Default 0.01, measured: 15^3 twist 19 + 32 -> 15 + 15 Newton iterations and 15.0 -> 7.9 s; 16x16x32
-    // stretch 78.7 -> 28.7 s; same end states (the projection only changes the path, not the solution).
-    model->exact_below = get_or<double>(in, "Exact Hessian below", 0.01);
-    if (!(model->exact_below >= 0.0 && model->exact_below < 1.0))
-      throw InputError("Solver: 'Exact Hessian below' must lie in [0, 1)");
     Stratimikos::DefaultLinearSolverBuilder builder;
     Stratimikos::enableMueLu<LO, GO, NodeType>(builder);
     try {
@@ -453,42 +412,41 @@ struct NonlinearSolver::Impl {
   }
 };
 
-NonlinearSolver::NonlinearSolver(ElasticSystem& system, const Teuchos::ParameterList& params)
+NonlinearSolver::NonlinearSolver(ElasticSystem& system, const SolverParameters& params)
     : impl_(std::make_unique<Impl>(system, params)) {}
 NonlinearSolver::~NonlinearSolver() = default;
 
-double NonlinearSolver::absolute_tolerance() const { return impl_->abs_tol; }
+double NonlinearSolver::absolute_tolerance() const { return impl_->params.absolute_tolerance; }
 void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->interrupt = std::move(interrupt); }
 
 SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
-  const double exact_below = impl_->model->exact_below;
-  if (exact_below > 0.0) {
-    Vector start(u, Teuchos::Copy);
-    SolveReport first = solve_once(u, progress);
-    if (first.converged || first.reason == "interrupted") return first;
-    // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
-    u.assign(start);
-    impl_->model->exact_below = 0.0;
-    SolveReport second = solve_once(u, progress);
-    impl_->model->exact_below = exact_below;
-    second.accumulate(first);
-    return second;
-  }
-  return solve_once(u, progress);
+  const Vector start(u, Teuchos::Copy);
+  const HessianPolicy policy(impl_->params.exact_below);
+  SolveReport first = solve_once(u, progress, policy);
+  if (first.converged() || first.status == SolveStatus::Interrupted || !first.exact_hessian_used) return first;
+  // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
+  u.assign(start);
+  SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
+  second.accumulate(first);
+  return second;
 }
 
-SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
+SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress,
+                                        HessianPolicy policy) {
   SolveReport report;
+  report.max_iterations = impl_->params.max_iterations;
   Impl& m = *impl_;
+  const SolverParameters& p = m.params;
   const auto t0 = Clock::now();
-  m.model->seconds_assembly = 0.0;
+  SolveState state{policy, {}, 0.0, 0.0};
+  m.model->attach(&state);
   auto x = Thyra::createVector(Teuchos::rcpFromRef(u), Thyra::createVectorSpace<double, LO, GO, NodeType>(u.getMap()));
   NOX::Thyra::Vector x0(x);
 
-  auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox_defaults));
+  auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox));
   auto observer = Teuchos::rcp(new ProgressObserver(progress, m.interrupt, *m.model));
   params->sublist("Solver Options").set<Teuchos::RCP<NOX::Observer>>("Observer", observer);
-  if (m.energy_merit) {
+  if (p.merit == "energy") {
     params->sublist("Solver Options")
         .set<Teuchos::RCP<NOX::MeritFunction::Generic>>("User Defined Merit Function", Teuchos::rcp(new EnergyMerit(*m.model)));
     auto& ls = params->sublist("Line Search");
@@ -503,18 +461,18 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     auto group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
     group->computeF();
     report.initial_residual = group->getNormF();
-    m.model->f_norm0 = report.initial_residual;
-    m.model->exact_disabled = false;
+    state.policy.start(report.initial_residual);
     auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
     auto converged = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     // Unscaled: the plain L2 norm of the force residual, as the paper's criterion (NOX scales by
     // 1/sqrt(n) unless told otherwise).
     converged->addStatusTest(Teuchos::rcp(
-        new NOX::StatusTest::NormF(m.abs_tol, NOX::Abstract::Vector::TwoNorm, NOX::StatusTest::NormF::Unscaled)));
-    if (m.rel_tol > 0.0)
-      converged->addStatusTest(Teuchos::rcp(new NOX::StatusTest::NormF(*group, m.rel_tol, NOX::Abstract::Vector::TwoNorm,
+        new NOX::StatusTest::NormF(p.absolute_tolerance, NOX::Abstract::Vector::TwoNorm, NOX::StatusTest::NormF::Unscaled)));
+    if (p.relative_tolerance > 0.0)
+      converged->addStatusTest(Teuchos::rcp(new NOX::StatusTest::NormF(*group, p.relative_tolerance,
+                                                                       NOX::Abstract::Vector::TwoNorm,
                                                                        NOX::StatusTest::NormF::Unscaled)));
-    auto maxiters = Teuchos::rcp(new NOX::StatusTest::MaxIters(m.max_iters));
+    auto maxiters = Teuchos::rcp(new NOX::StatusTest::MaxIters(p.max_iterations));
     auto tests = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     tests->addStatusTest(finite);
     tests->addStatusTest(converged);
@@ -527,29 +485,30 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
       report.linear_iterations = stats->linearSolve.lastNonlinearSolve_NumLinearIterations;
     const auto& final_group = dynamic_cast<const NOX::Thyra::Group&>(solver->getSolutionGroup());
     report.final_residual = final_group.getNormF();
-    report.converged = status == NOX::StatusTest::Converged;
-    if (!report.converged) {
-      if (finite->getStatus() == NOX::StatusTest::Failed)
-        report.reason = "non-finite residual (NaN or Inf)";
-      else if (maxiters->getStatus() == NOX::StatusTest::Failed)
-        report.reason = "no convergence in " + std::to_string(m.max_iters) + " Newton iterations";
-      else
-        report.reason = "line search failed to decrease the " + std::string(m.energy_merit ? "energy" : "residual");
-    }
     // Copy the solution back (the Thyra vector wraps u, but NOX keeps its own copies).
     const auto& xs = dynamic_cast<const NOX::Thyra::Vector&>(final_group.getX());
     u.assign(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(xs.getThyraVector())));
+    if (status == NOX::StatusTest::Converged)
+      // A line search on the residual, or a full step, can end where the energy is undefined: never
+      // accept such a state.
+      report.status = m.sys.evaluate(u, nullptr, nullptr).undefined > 0 ? SolveStatus::UndefinedEnergy : SolveStatus::Converged;
+    else if (finite->getStatus() == NOX::StatusTest::Failed)
+      report.status = SolveStatus::NonFinite;
+    else if (maxiters->getStatus() == NOX::StatusTest::Failed)
+      report.status = SolveStatus::MaxIterations;
+    else
+      report.status = SolveStatus::LineSearchFailed;
   } catch (const ProgressObserver::Interrupted&) {
-    report.converged = false;
-    report.reason = "interrupted";
+    report.status = SolveStatus::Interrupted;
   } catch (const std::exception& e) {
-    report.converged = false;
-    std::string what = e.what();
-    if (what.size() > 600) what = what.substr(0, 600) + "...";
-    report.reason = "solver exception: " + what;
+    report.status = SolveStatus::SolverError;
+    report.detail = e.what();
+    if (report.detail.size() > 600) report.detail = report.detail.substr(0, 600) + "...";
   }
+  report.exact_hessian_used = state.policy.exact_used();
+  m.model->attach(nullptr);
   report.seconds_total = since(t0);
-  report.seconds_assembly = m.model->seconds_assembly;
+  report.seconds_assembly = state.seconds_assembly;
   report.seconds_line_search = observer->line_search_;
   // Preconditioner setup and linear solve from NOX's own timers (cumulative: take differences).
   auto total = [](const char* name) {

@@ -1,11 +1,14 @@
 // The discrete elastic system on Tpetra: DOF maps, the CRS graph (built once from the mesh), the
-// assembly of energy, internal force and (projected) stiffness, Dirichlet elimination, and the
-// rigid-body near-null-space and coordinates MueLu needs.
+// assembly of energy, internal force and (projected) stiffness by the element kernels, the Dirichlet
+// elimination (the algebra owns the essential DOFs, as MFEM's NonlinearForm does), and the rigid-body
+// near-null space and coordinates MueLu needs.
 #pragma once
 
 #include <sinew/discretization/elements.hpp>
 #include <sinew/discretization/mesh.hpp>
 #include <sinew/materials/models.hpp>
+
+#include <optional>
 
 #include <Tpetra_CrsGraph_fwd.hpp>
 #include <Tpetra_CrsMatrix_fwd.hpp>
@@ -39,13 +42,25 @@ struct EvaluationTotals {
 
 enum class Backend { Default, Serial };
 
+// Which law each element has: a default, and laws for named element groups (volume regions) of the mesh.
+struct MaterialAssignment {
+  MaterialSpec default_law;
+  std::vector<std::pair<std::string, MaterialSpec>> regions;
+};
+
 class ElasticSystem {
  public:
-  ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialSpec& material);
+  // Throws InputError when a region of `materials` is not an element group of the mesh.
+  ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials);
+  ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialSpec& material)
+      : ElasticSystem(std::move(comm), std::move(mesh), MaterialAssignment{material, {}}) {}
   ~ElasticSystem();
 
   const Mesh& mesh() const { return mesh_; }
-  const MaterialSpec& material() const { return material_; }
+  // The law of elements in no region (the only one for a mesh without regions).
+  const MaterialSpec& material() const { return blocks_.front().law; }
+  // Largest (mu_L + |lambda_L|) over the laws in use: the stiffness scale of the energy's terms.
+  double stiffness_scale() const;
   Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
   Teuchos::RCP<const Map> owned_dofs() const { return owned_dofs_; }
   Teuchos::RCP<const Map> overlap_dofs() const { return overlap_dofs_; }
@@ -62,11 +77,12 @@ class ElasticSystem {
   const std::vector<int>& fixed_owned_dofs() const { return fixed_owned_; }
   std::size_t global_fixed_dofs() const;
   void set_body_force(const std::array<double, 3>& force_per_reference_volume);
-  void set_projection(Projection p) { material_.projection = p; }
 
-  // Energy, internal force (dE/du, zero in Dirichlet rows) and stiffness (projected as the material
-  // says; Dirichlet rows and columns eliminated). force and K may be null. u holds total displacements.
-  EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default) const;
+  // Energy, internal force (dE/du, zero in Dirichlet rows) and stiffness (projected as each law says,
+  // or as `projection` says for all when given; Dirichlet rows and columns eliminated). force and K may
+  // be null. u holds total displacements.
+  EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default,
+                            std::optional<Projection> projection = std::nullopt) const;
 
   // Per owned element: volume-averaged energy density and J of the last evaluate() that asked for them.
   void element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const;
@@ -77,12 +93,22 @@ class ElasticSystem {
   Teuchos::RCP<MultiVector> coordinates() const;
 
  private:
-  EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, bool fields,
-                       Kokkos::View<double*> psi, Kokkos::View<double*> J) const;
+  EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
+                       ElementFields<Kokkos::DefaultExecutionSpace::memory_space> fields) const;
+  // Rows and columns of Dirichlet DOFs: off-diagonal entries zeroed, the diagonal kept (the sum of the
+  // elements' own diagonal entries, a positive scale matching the stiffness, so CG sees a well-conditioned
+  // identity-like block there); their force entries zeroed.
+  void eliminate_dirichlet(Vector* force, CrsMatrix* K) const;
+
+  // The elements of one law.
+  struct Block {
+    MaterialSpec law;
+    Kokkos::View<int*> elements;  // local element ids
+  };
 
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   Mesh mesh_;
-  MaterialSpec material_;
+  std::vector<Block> blocks_;  // blocks_[0]: the default law (possibly with no elements)
   ElementData elements_;
   Teuchos::RCP<const Map> owned_dofs_, overlap_dofs_, owned_nodes_;
   Teuchos::RCP<const Import> importer_;
@@ -90,6 +116,7 @@ class ElasticSystem {
   Teuchos::RCP<Vector> u_overlap_;
   Kokkos::View<char*> fixed_;
   std::vector<int> fixed_owned_;
+  bool any_fixed_ = false;  // some local (owned or ghost) DOF is fixed
   std::array<double, 3> body_{{0.0, 0.0, 0.0}};
   double reference_volume_ = 0.0;
 };

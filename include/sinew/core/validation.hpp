@@ -1,20 +1,17 @@
-// Helpers for validating Teuchos parameter lists with messages that name the culprit.
+// Name matching for messages that name the culprit: "unknown entry 'Poison ratio' in Material (did you
+// mean 'Poisson ratio'?)".
 #pragma once
-
-#include <Teuchos_ParameterList.hpp>
 
 #include <string>
 #include <vector>
 
-namespace sinew {
-
-// The value of `name` in a const list, or `fallback` when absent (Teuchos' defaulting get is non-const).
-template <class T>
-T get_or(const Teuchos::ParameterList& list, const std::string& name, const T& fallback) {
-  return list.isParameter(name) ? list.get<T>(name) : fallback;
+namespace Teuchos {
+class ParameterList;
 }
 
-// Levenshtein distance, case-insensitive.
+namespace sinew {
+
+// Levenshtein distance with adjacent swaps, case-insensitive.
 std::size_t edit_distance(const std::string& a, const std::string& b);
 
 // The candidate closest to `name`, or "" when none is reasonably close.

@@ -8,6 +8,9 @@
 // interleaved, 3 * node + component, with a node's three DOFs on one rank, as MueLu expects.
 #pragma once
 
+#include <sinew/core/errors.hpp>
+#include <sinew/core/section.hpp>
+
 #include <Kokkos_Core.hpp>
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
@@ -17,10 +20,6 @@
 #include <string>
 #include <vector>
 
-namespace Teuchos {
-class ParameterList;
-}
-
 namespace sinew {
 
 enum class ElementType { Hex8, Tet4 };
@@ -29,6 +28,45 @@ constexpr int nodes_per_element(ElementType t) { return t == ElementType::Hex8 ?
 constexpr int quadrature_points(ElementType t) { return t == ElementType::Hex8 ? 8 : 1; }
 std::string to_string(ElementType t);
 
+inline const Choices<ElementType>& element_choices() {
+  static const Choices<ElementType> c = {{"hex8", ElementType::Hex8}, {"tet4", ElementType::Tet4}};
+  return c;
+}
+
+// The "Mesh" section of a scene.
+struct MeshParameters {
+  std::string type;
+  ElementType element = ElementType::Hex8;
+  std::array<int, 3> cells{};
+  std::array<double, 3> lower{}, upper{};
+  double radius = 0.0, length = 0.0, jitter = 0.0;
+  int jitter_seed = 0;
+
+  template <class V>
+  void visit(V& v) {
+    v.choice("Type", type, std::string("box"), Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}},
+             "mesh generator: box, or cylinder (voxelized, axis along z)");
+    v.choice("Element", element, ElementType::Hex8, element_choices(),
+             "hex8 (2x2x2 Gauss points) or tet4 (each lattice cell split into 6 tets, 1 point)");
+    v.entry("Elements", cells, {4, 4, 4}, "cells along x, y, z (cylinder: across the diameter in x and y, along z)",
+            Range::closed(1, 100000));
+    v.entry("Lower corner", lower, {0.0, 0.0, 0.0}, "box: lower corner");
+    v.entry("Upper corner", upper, {1.0, 1.0, 1.0}, "box: upper corner");
+    v.entry("Radius", radius, 0.5, "cylinder: radius", Range::positive());
+    v.entry("Length", length, 1.0, "cylinder: length along z (from z = 0)", Range::positive());
+    v.entry("Jitter", jitter, 0.0, "move nodes off the bounding box at random by up to this many cell sizes",
+            Range::closed_open(0.0, 10.0));
+    v.entry("Jitter seed", jitter_seed, 1, "seed of the jitter");
+  }
+  template <class Context>
+  void check(const Context& c) const {
+    if (!c.given("Elements")) c.fail("missing entry 'Elements' (cells along x, y, z)", InputErrorKind::MissingEntry);
+    for (int k = 0; k < 3; ++k)
+      if (type == "box" && !(upper[k] > lower[k])) c.fail("'Upper corner' must exceed 'Lower corner' in every coordinate");
+  }
+};
+
+// A lattice: an extruded 2D mask of cells over a bounding box.
 struct MeshSpec {
   std::string shape = "box";  // box | cylinder
   ElementType element = ElementType::Hex8;
@@ -38,9 +76,8 @@ struct MeshSpec {
   int jitter_seed = 1;
 };
 
-// Mesh spec from a "Mesh" sublist (validated; throws InputError naming the entry).
-MeshSpec mesh_from_parameters(const Teuchos::ParameterList& list);
-Teuchos::ParameterList valid_mesh_parameters();
+// The lattice a "Mesh" section describes.
+MeshSpec lattice_spec(const MeshParameters& p);
 
 using GlobalId = long long;
 
@@ -59,6 +96,11 @@ struct Mesh {
   std::vector<GlobalId> element_gid;
   std::size_t n_owned_elements = 0;
   Kokkos::View<int**> conn;  // element x nodes_per_element, local node indices
+
+  // Element groups (the volume physical groups of a mesh file): their names, and each local element's
+  // group (an index into the names, -1 for none; empty when the mesh has no groups).
+  std::vector<std::string> element_group_names;
+  std::vector<int> element_group;
 
   std::size_t local_nodes() const { return node_gid.size(); }
   std::size_t local_elements() const { return element_gid.size(); }

@@ -1,9 +1,11 @@
-// The quasi-static run: load steps with step cutting, progress lines, log and output.
+// The quasi-static run: load steps with step cutting, progress lines, log, output and checkpoints.
 #pragma once
 
 #include <sinew/algebra/elastic_system.hpp>
 #include <sinew/driver/config.hpp>
+#include <sinew/io/output.hpp>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -14,14 +16,8 @@ struct RunOptions {
   std::string restart_file;  // continue from this checkpoint (empty: start from the beginning)
 };
 
-// Exit codes of a run.
-// A run stopped by SIGINT/SIGTERM exits with 128 + the signal number, after writing a checkpoint.
-enum ExitCode { kSuccess = 0, kFailure = 1, kUsage = 2, kInputError = 3, kNoConvergence = 4 };
-
 class Scene;
 class NonlinearSolver;
-class Output;
-struct StepRecord;
 
 // One quasi-static run: the scene, its solver and output, and the load-step loop.
 class Simulation {
@@ -30,27 +26,46 @@ class Simulation {
   Simulation(const SceneConfig& config, const RunOptions& options,
              Teuchos::RCP<const Teuchos::Comm<int>> comm = Teuchos::null);
   ~Simulation();
-  // Runs all load steps; returns kSuccess or kNoConvergence (after writing the last converged state).
+  // Runs the remaining load steps; returns the exit code: success, no convergence (after writing the
+  // last converged state), or 128 + N when stopped by signal N (after writing a checkpoint).
   int run();
+
+  // The collective "should we stop, and why" check run between Newton iterations and after each step:
+  // returns a signal number, 0 to go on. The default asks whether any rank received SIGINT or SIGTERM;
+  // tests replace it to stop at a chosen point.
+  void set_stop_check(std::function<int()> check);
+
   Scene& scene() { return *scene_; }
   const Vector& displacement() const { return *u_; }
   const std::vector<StepRecord>& records() const { return records_; }
   const Output& output() const { return *out_; }
 
  private:
+  enum class StepOutcome { Done, Stopped, Failed };
+  void print_header() const;
+  // Advances the state through load step k, cutting the increment when a solve fails.
+  StepOutcome advance(int k, StepRecord& rec);
+  void print_step(const StepRecord& rec) const;
+  void print_summary() const;
+
   SceneConfig config_;
   RunOptions opt_;
+  Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<NonlinearSolver> solver_;
   std::unique_ptr<Output> out_;
   Teuchos::RCP<Vector> u_;
   std::vector<StepRecord> records_;
-  int first_step_ = 1;       // 1, or the step after the checkpoint a restart continues from
-  double start_load_ = 0.0;  // load fraction of the state in u_ at the start
+  LoadState at_;  // where the run stands: the state in u_
+  std::function<int()> stop_check_;
+  int stop_signal_ = 0;
+  bool talk_ = false;
+  double started_ = 0.0;     // wall clock at the start of run(), seconds
+  double start_load_ = 0.0;  // load of the state run() started from (for the time estimate)
 };
 
 // Runs a scene on all ranks of the default communicator; returns the process exit code. Never
-// throws for input or convergence problems: they are reported on stderr by rank 0.
+// throws: input and convergence problems are reported on stderr by rank 0.
 int run_scene(const SceneConfig& scene, const RunOptions& options);
 
 }  // namespace sinew

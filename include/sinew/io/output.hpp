@@ -1,17 +1,19 @@
 // Results on disk: parallel HDF5 written collectively by all ranks, an XDMF index for ParaView, and a
-// per-step CSV log. Every file is written aside and renamed into place, so a crash never leaves a
-// half-written file where a good one was.
+// per-step CSV log. Every file is written aside, flushed to disk and renamed into place (and the folder
+// synced), so a crash never leaves a half-written file where a good one was; a failure on any rank is
+// reported on every rank, never left waiting in a barrier.
 //
-//   DIR/mesh.h5            /coordinates (nodes x 3, reference), /connectivity (elements x nodes, global ids)
+//   DIR/mesh.h5            /coordinates (nodes x 3, reference), /connectivity (elements x nodes)
 //   DIR/step_NNNNNN.h5     /position (x = X + u), /displacement, /J and /energy_density (per element),
 //                          attributes: load fraction, step
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/log.csv            one row per converged load step
-//   DIR/checkpoint.h5      /displacement and the step and load reached: everything a restart needs
+//   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
 #pragma once
 
-#include <sinew/scenes/scene.hpp>
-#include <sinew/solver/nonlinear_solver.hpp>
+#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/core/range.hpp>
+#include <sinew/solver/solve_report.hpp>
 
 #include <fstream>
 #include <string>
@@ -19,8 +21,25 @@
 
 namespace sinew {
 
-Teuchos::ParameterList valid_output_parameters();
+// The "Output" section of a scene.
+struct OutputParameters {
+  std::string directory;
+  int every = 0, checkpoint_every = 0;
+  bool hdf5 = true;
 
+  template <class V>
+  void visit(V& v) {
+    v.entry("Directory", directory, std::string(""), "results folder (default results/<Scene>)");
+    v.entry("Every", every, 1, "write fields every this many steps (the last step is always written)",
+            Range::at_least(1));
+    v.entry("HDF5", hdf5, true, "write HDF5/XDMF fields (the CSV log is always written)");
+    v.entry("Checkpoint every", checkpoint_every, 1,
+            "write DIR/checkpoint.h5 every this many steps (0: never); sinew --restart continues from it",
+            Range::non_negative());
+  }
+};
+
+// One converged load step, as the log records it.
 struct StepRecord {
   int step = 0;
   double load = 0.0;
@@ -30,46 +49,52 @@ struct StepRecord {
   double volume_ratio = 1.0;
 };
 
+// Where a run stands on its load path: everything a restart needs besides the displacement. Inside a
+// step that was cut, `load` lies between step/steps and (step + 1)/steps and `increment` is the cut one.
+struct LoadState {
+  int step = 0;            // the last completed load step
+  double load = 0.0;       // the load fraction of the displacement
+  double increment = 0.0;  // the next increment to try (0: the rest of the next step)
+  int cuts = 0;            // cuts made so far in the step under way
+};
+
 class Output {
  public:
-  // params: the scene's "Output" sublist (validated here). Collective. With restart_step >= 0 the run
-  // continues an earlier one in the same folder: the log keeps its rows up to that step and the XDMF
-  // index its step files.
-  Output(const Teuchos::ParameterList& params, const Scene& scene, const std::string& scene_file,
+  // Collective. `name` names the XDMF file; `steps` is the number of load steps (for restarts). With
+  // restart_step >= 0 the run continues an earlier one in the same folder: the log keeps its rows up to
+  // that step and the XDMF index its step files. Throws InputError (kind File) when the folder cannot
+  // be created.
+  Output(const OutputParameters& params, const ElasticSystem& system, const std::string& name, int steps,
          int restart_step = -1);
 
-  bool enabled() const { return hdf5_; }
+  bool enabled() const { return params_.hdf5; }
   const std::string& directory() const { return dir_; }
-  int every() const { return every_; }
+  int every() const { return params_.every; }
 
   void write_mesh();
-  // Collective: one step file (aside, then renamed) and the XDMF index.
+  // Collective: one step file and the XDMF index.
   void write_step(int step, double load, const Vector& u);
   // Rank 0 appends a row to log.csv.
   void log(const StepRecord& r);
   // Path of the HDF5 file of a written step.
   std::string step_file(int step) const;
 
-  int checkpoint_every() const { return checkpoint_every_; }
+  int checkpoint_every() const { return params_.checkpoint_every; }
   std::string checkpoint_file() const { return dir_ + "/checkpoint.h5"; }
-  // Collective: the state after `step` converged at load fraction `load` (aside, then renamed).
-  void write_checkpoint(int step, double load, const Vector& u);
+  // Collective: the displacement u at load state `at`.
+  void write_checkpoint(const LoadState& at, const Vector& u);
 
-  struct Checkpoint {
-    int step = 0;
-    double load = 0.0;
-  };
-  // Collective: reads a checkpoint into u (which must live on the same mesh). Throws InputError when the
-  // file is missing, unreadable or from another mesh.
-  static Checkpoint read_checkpoint(const std::string& path, const Scene& scene, Vector& u);
+  // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
+  // Throws InputError (kind File) when the file is missing, unreadable, corrupt or from another scene.
+  static LoadState read_checkpoint(const std::string& path, const ElasticSystem& system, int steps, Vector& u);
 
  private:
   void write_xdmf() const;
 
-  const Scene& scene_;
+  OutputParameters params_;
+  const ElasticSystem& sys_;
   std::string dir_, name_;
-  bool hdf5_ = true;
-  int every_ = 1, checkpoint_every_ = 1;
+  int steps_ = 1;
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
   std::ofstream log_;

@@ -9,11 +9,31 @@
 
 #include <sinew/materials/material.hpp>
 
+#include <sstream>
+
 namespace sinew {
 
 struct ArrudaBoyce : InvariantModel<ArrudaBoyce> {
   static constexpr const char* name = "arruda-boyce";
+  static constexpr const char* equation = "Eq. 58";
+  struct Options {
+    double beta1, beta2;
+    template <class V>
+    void visit(V& v) {
+      v.entry("Arruda-Boyce beta1", beta1, 0.05, "arruda-boyce: beta1 of Eq. 58", Range::non_negative());
+      v.entry("Arruda-Boyce beta2", beta2, 0.005, "arruda-boyce: beta2 of Eq. 58", Range::non_negative());
+    }
+  };
   double mu = 0, lambda = 0, b1 = 0, b2 = 0, alpha = 0, psi_rest = 0;
+
+  static ArrudaBoyce make(double mu_L, double lambda_L, const Options& o) { return from_lame(mu_L, lambda_L, o.beta1, o.beta2); }
+  std::string invalid() const {
+    if (lambda > 0.0) return "";
+    std::ostringstream os;
+    os.precision(6);
+    os << "'Arruda-Boyce beta1'/'beta2' leave a non-positive volume stiffness lambda = " << lambda << " at rest";
+    return os.str();
+  }
 
   static ArrudaBoyce from_lame(double mu_L, double lambda_L, double beta1, double beta2) {
     ArrudaBoyce m;

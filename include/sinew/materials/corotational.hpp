@@ -21,7 +21,12 @@ KOKKOS_INLINE_FUNCTION double floored_pair_sum(double si, double sj) {
 
 struct Corotational : SigmaModel<Corotational> {
   static constexpr const char* name = "corotational";
+  static constexpr const char* equation = "Eq. 3";
+  using Options = NoOptions;
   double mu = 0, lambda = 0;
+
+  static Corotational make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L); }
+  std::string invalid() const { return ""; }
 
   static Corotational from_lame(double mu_L, double lambda_L) {
     Corotational m;

@@ -13,9 +13,23 @@ namespace sinew {
 
 struct FilteredNeoHookean : SigmaModel<FilteredNeoHookean> {
   static constexpr const char* name = "filtered-neohookean";
-  double mu = 0, lambda = 0, threshold = 0.25;
+  static constexpr const char* equation = "Eq. 5, filtered below s_f";
+  struct Options {
+    double threshold;
+    template <class V>
+    void visit(V& v) {
+      v.entry("Filter threshold", threshold, 0.25,
+              "filtered-neohookean: singular-value threshold s_f below which log s is replaced by its Taylor "
+              "extension (the paper's PhysBAM runs used 0.25)",
+              Range::open(0.0, 1.0));
+    }
+  };
+  double mu = 0, lambda = 0, threshold = 0;
 
-  static FilteredNeoHookean from_lame(double mu_L, double lambda_L, double threshold = 0.25) {
+  static FilteredNeoHookean make(double mu_L, double lambda_L, const Options& o) { return from_lame(mu_L, lambda_L, o.threshold); }
+  std::string invalid() const { return ""; }
+
+  static FilteredNeoHookean from_lame(double mu_L, double lambda_L, double threshold) {
     FilteredNeoHookean m;
     m.mu = mu_L;
     m.lambda = lambda_L;

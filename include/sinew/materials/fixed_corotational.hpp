@@ -9,7 +9,12 @@ namespace sinew {
 
 struct FixedCorotational : SigmaModel<FixedCorotational> {
   static constexpr const char* name = "fixed-corotational";
+  static constexpr const char* equation = "Eq. 49";
+  using Options = NoOptions;
   double mu = 0, lambda = 0;
+
+  static FixedCorotational make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L); }
+  std::string invalid() const { return ""; }
 
   static FixedCorotational from_lame(double mu_L, double lambda_L) {
     FixedCorotational m;

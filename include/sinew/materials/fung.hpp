@@ -16,14 +16,39 @@
 
 #include <sinew/materials/material.hpp>
 
+#include <sstream>
+
 namespace sinew {
 
 struct Fung : InvariantModel<Fung> {
   static constexpr const char* name = "fung";
+  static constexpr const char* equation = "Eq. 53";
+  struct Options {
+    double fraction, exponent;
+    template <class V>
+    void visit(V& v) {
+      v.entry("Fung fraction", fraction, 0.5,
+              "fung: share f of the small-strain shear modulus carried by the exponential term", Range::closed_open(0.0, 1.0));
+      v.entry("Fung exponent", exponent, 1.0, "fung: hardening exponent mu1 of Eq. 53", Range::positive());
+    }
+  };
   double mu0 = 0, lambda = 0, gamma = 0, mu1 = 0, alpha = 0, psi_rest = 0;
+  Options options{};
+
+  static Fung make(double mu_L, double lambda_L, const Options& o) { return from_lame(mu_L, lambda_L, o.fraction, o.exponent); }
+  std::string invalid() const {
+    if (lambda > 0.0) return "";
+    std::ostringstream os;
+    os.precision(6);
+    os << "'Fung exponent' " << options.exponent << " with 'Fung fraction' " << options.fraction
+       << " leaves a non-positive volume stiffness lambda = " << lambda
+       << " at rest; lower one of them (f * mu1 must stay below 1 + lambda_L/mu_L)";
+    return os.str();
+  }
 
   static Fung from_lame(double mu_L, double lambda_L, double fraction, double mu1) {
     Fung m;
+    m.options = {fraction, mu1};
     m.mu1 = mu1;
     m.gamma = 2.0 * fraction * mu_L / mu1;
     m.mu0 = (1.0 - fraction) * mu_L;

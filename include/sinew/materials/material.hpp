@@ -9,7 +9,18 @@
 //   Mat9   projected_hessian(const Mat3& F, Projection) const;  // from the closed-form eigen-system
 //   bool   defined(const Mat3& F) const;                   // false where Psi is +inf (Neo-Hookean, J<=0)
 //
-// and a static `name`. Models never allocate and never call host-only code.
+// and, on the host side, what the model list (model_list.hpp) needs to offer it to users:
+//
+//   static constexpr const char* name;                     // the XML "Model" value
+//   static constexpr const char* equation;                 // where the paper defines it
+//   using Options = ...;                                   // its parameters beyond (mu_L, lambda_L)
+//   static Model make(double mu_L, double lambda_L, const Options&);
+//   std::string invalid() const;                           // why these parameters make no stable
+//                                                          // material ("" when they do)
+//
+// Options is a struct of numbers whose `visit` names each with its default, range and documentation
+// (core/section.hpp): the model's parameters are declared next to its equations and nowhere else.
+// Models never allocate and never call host-only code in their device members.
 //
 // All models here are isotropic, so their Hessian diagonalizes in the basis built from the
 // rotation-variant SVD F = U Sigma V^T (Sec. 4.6, Appendix A): three "scaling" directions
@@ -19,11 +30,20 @@
 // those scalars; `SigmaEigensystem::assemble` rebuilds the (projected) 9x9 matrix.
 #pragma once
 
+#include <sinew/core/section.hpp>
 #include <sinew/core/small_matrix.hpp>
 #include <sinew/core/sym_eigen.hpp>
 #include <sinew/materials/svd3.hpp>
 
+#include <string>
+
 namespace sinew {
+
+// The Options of a model whose only parameters are the two Lame constants.
+struct NoOptions {
+  template <class V>
+  void visit(V&) {}
+};
 
 // How a Hessian is made positive semi-definite.
 enum class Projection {

@@ -1,71 +1,102 @@
-// All material models and the run-time selection of one. The choice is made once, outside any kernel:
-// `with_material(spec, fn)` calls fn with the concrete model struct, so each kernel is instantiated once
-// per model and no virtual call or switch runs per quadrature point.
+// Run-time selection of a material model from the list in model_list.hpp. A MaterialSpec holds what the
+// user asked for (model, Lame constants, the model's options, projection); `with_material(spec, fn)`
+// builds the concrete model struct and calls fn with it, so each kernel is instantiated once per model
+// and no virtual call or switch runs per quadrature point.
 #pragma once
 
-#include <sinew/materials/arruda_boyce.hpp>
-#include <sinew/materials/corotational.hpp>
-#include <sinew/materials/filtered_neohookean.hpp>
-#include <sinew/materials/fixed_corotational.hpp>
-#include <sinew/materials/fung.hpp>
-#include <sinew/materials/neohookean.hpp>
-#include <sinew/materials/stable_neohookean.hpp>
-#include <sinew/materials/stable_neohookean_nobarrier.hpp>
-#include <sinew/materials/stvk.hpp>
+#include <sinew/materials/model_list.hpp>
 
+#include <cstddef>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace sinew {
 
-enum class MaterialModel {
-  StableNeoHookean,
-  StableNeoHookeanNoBarrier,
-  NeoHookean,
-  FilteredNeoHookean,
-  Corotational,
-  FixedCorotational,
-  StVK,
-  StVKKikuuwe,
-  Fung,
-  ArrudaBoyce
-};
+#define SINEW_MODEL_ENUM(M) M,
+enum class MaterialModel { SINEW_MATERIAL_MODELS(SINEW_MODEL_ENUM) };
+#undef SINEW_MODEL_ENUM
 
-// A fully resolved material: model, Lame constants of the small-strain response, the model-specific
-// parameters and the Hessian projection. Built from XML by material_from_parameters (host only).
+#define SINEW_MODEL_COUNT(M) +1
+inline constexpr std::size_t kMaterialModelCount = 0 SINEW_MATERIAL_MODELS(SINEW_MODEL_COUNT);
+#undef SINEW_MODEL_COUNT
+
+// Every model's Options, in list order (only the chosen model's are used). Slot 0 is a placeholder
+// so that the list expands without a leading comma: model k's options sit in slot k + 1.
+#define SINEW_MODEL_OPTIONS(M) , M::Options
+using MaterialOptions = std::tuple<std::nullptr_t SINEW_MATERIAL_MODELS(SINEW_MODEL_OPTIONS)>;
+#undef SINEW_MODEL_OPTIONS
+
+// The enum value of a model struct.
+template <class M>
+constexpr MaterialModel model_of();
+#define SINEW_MODEL_OF(M) \
+  template <>             \
+  constexpr MaterialModel model_of<M>() { return MaterialModel::M; }
+SINEW_MATERIAL_MODELS(SINEW_MODEL_OF)
+#undef SINEW_MODEL_OF
+
+// Every model's options at their declared defaults.
+inline MaterialOptions default_material_options() {
+#define SINEW_MODEL_DEFAULTS(M) , default_section<M::Options>()
+  return MaterialOptions{nullptr SINEW_MATERIAL_MODELS(SINEW_MODEL_DEFAULTS)};
+#undef SINEW_MODEL_DEFAULTS
+}
+
 struct MaterialSpec {
   MaterialModel model = MaterialModel::StableNeoHookean;
-  double mu_L = 0.0, lambda_L = 0.0;     // Lame constants the model reproduces at small strain
-  double fung_fraction = 0.5;            // share of the shear modulus in the exponential term
-  double fung_exponent = 1.0;            // mu1 of Eq. 53
-  double ab_beta1 = 0.05, ab_beta2 = 0.005;  // Eq. 58
-  double kikuuwe_kappa = 0.0;            // Eq. 51
-  double filter_threshold = 0.25;        // filtered Neo-Hookean singular-value threshold
+  double mu_L = 0.0, lambda_L = 0.0;  // Lame constants the model reproduces at small strain
+  MaterialOptions options = default_material_options();
   Projection projection = Projection::Clamp;
 };
+
+// The options of model M in a spec.
+template <class M>
+typename M::Options& options_of(MaterialSpec& s) {
+  return std::get<static_cast<std::size_t>(model_of<M>()) + 1>(s.options);
+}
+template <class M>
+const typename M::Options& options_of(const MaterialSpec& s) {
+  return std::get<static_cast<std::size_t>(model_of<M>()) + 1>(s.options);
+}
+
+// A spec of `model` with Lame constants (mu_L, lambda_L), every option at its default, clamp projection.
+inline MaterialSpec material_defaults(MaterialModel model, double mu_L, double lambda_L) {
+  MaterialSpec s;
+  s.model = model;
+  s.mu_L = mu_L;
+  s.lambda_L = lambda_L;
+  return s;
+}
 
 template <class Fn>
 decltype(auto) with_material(const MaterialSpec& s, Fn&& fn) {
   switch (s.model) {
-    case MaterialModel::StableNeoHookeanNoBarrier:
-      return fn(StableNeoHookeanNoBarrier::from_lame(s.mu_L, s.lambda_L));
-    case MaterialModel::NeoHookean: return fn(NeoHookean::from_lame(s.mu_L, s.lambda_L));
-    case MaterialModel::FilteredNeoHookean:
-      return fn(FilteredNeoHookean::from_lame(s.mu_L, s.lambda_L, s.filter_threshold));
-    case MaterialModel::Corotational: return fn(Corotational::from_lame(s.mu_L, s.lambda_L));
-    case MaterialModel::FixedCorotational: return fn(FixedCorotational::from_lame(s.mu_L, s.lambda_L));
-    case MaterialModel::StVK: return fn(StVK::from_lame(s.mu_L, s.lambda_L, 0.0));
-    case MaterialModel::StVKKikuuwe: return fn(StVK::from_lame(s.mu_L, s.lambda_L, s.kikuuwe_kappa));
-    case MaterialModel::Fung: return fn(Fung::from_lame(s.mu_L, s.lambda_L, s.fung_fraction, s.fung_exponent));
-    case MaterialModel::ArrudaBoyce: return fn(ArrudaBoyce::from_lame(s.mu_L, s.lambda_L, s.ab_beta1, s.ab_beta2));
-    case MaterialModel::StableNeoHookean: break;
+#define SINEW_MODEL_CASE(M) \
+  case MaterialModel::M: return fn(M::make(s.mu_L, s.lambda_L, options_of<M>(s)));
+    SINEW_MATERIAL_MODELS(SINEW_MODEL_CASE)
+#undef SINEW_MODEL_CASE
   }
-  return fn(StableNeoHookean::from_lame(s.mu_L, s.lambda_L));
+  return fn(StableNeoHookean::make(s.mu_L, s.lambda_L, options_of<StableNeoHookean>(s)));
 }
 
-// Names used in XML ("Model" entry) and on the command line, in enum order.
-const std::vector<std::string>& material_model_names();
-std::string to_string(MaterialModel m);
-std::string to_string(Projection p);
+// Names used in XML ("Model" entry) and on the command line, in list order.
+inline const std::vector<std::string>& material_model_names() {
+#define SINEW_MODEL_NAME(M) M::name,
+  static const std::vector<std::string> names = {SINEW_MATERIAL_MODELS(SINEW_MODEL_NAME)};
+#undef SINEW_MODEL_NAME
+  return names;
+}
+inline std::string to_string(MaterialModel m) { return material_model_names().at(static_cast<std::size_t>(m)); }
+
+inline const Choices<Projection>& projection_choices() {
+  static const Choices<Projection> c = {{"none", Projection::None}, {"clamp", Projection::Clamp}, {"abs", Projection::Abs}};
+  return c;
+}
+inline std::string to_string(Projection p) {
+  for (const auto& [name, value] : projection_choices())
+    if (value == p) return name;
+  return "?";
+}
 
 }  // namespace sinew

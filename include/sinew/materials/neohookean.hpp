@@ -12,7 +12,12 @@ namespace sinew {
 
 struct NeoHookean : InvariantModel<NeoHookean> {
   static constexpr const char* name = "neohookean";
+  static constexpr const char* equation = "Eq. 5";
+  using Options = NoOptions;
   double mu = 0, lambda = 0;
+
+  static NeoHookean make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L); }
+  std::string invalid() const { return ""; }
 
   static NeoHookean from_lame(double mu_L, double lambda_L) {
     NeoHookean m;

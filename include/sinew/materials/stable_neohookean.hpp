@@ -10,7 +10,15 @@ namespace sinew {
 
 struct StableNeoHookean : InvariantModel<StableNeoHookean> {
   static constexpr const char* name = "stable-neohookean";
+  static constexpr const char* equation = "Eq. 14 (Lame map Eq. 15-16)";
+  using Options = NoOptions;
   double mu = 0, lambda = 0, alpha = 0, psi_rest = 0;
+
+  static StableNeoHookean make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L); }
+  // Eq. 15-16 need lambda > 0 after the reparameterization for alpha to exist.
+  std::string invalid() const {
+    return lambda > 0.0 ? "" : "stable-neohookean needs lambda_L + 5/6 mu_L > 0 (nu > -0.3125 roughly)";
+  }
 
   static StableNeoHookean from_lame(double mu_L, double lambda_L) {
     StableNeoHookean m;

@@ -10,7 +10,12 @@ namespace sinew {
 
 struct StableNeoHookeanNoBarrier : InvariantModel<StableNeoHookeanNoBarrier> {
   static constexpr const char* name = "stable-neohookean-nobarrier";
+  static constexpr const char* equation = "Eq. 13 (Appendix D)";
+  using Options = NoOptions;
   double mu = 0, lambda = 0, alpha = 0;
+
+  static StableNeoHookeanNoBarrier make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L); }
+  std::string invalid() const { return lambda > 0.0 ? "" : "stable-neohookean-nobarrier needs lambda_L + mu_L > 0"; }
 
   static StableNeoHookeanNoBarrier from_lame(double mu_L, double lambda_L) {
     StableNeoHookeanNoBarrier m;

@@ -6,11 +6,18 @@
 
 #include <sinew/materials/material.hpp>
 
+#include <optional>
+
 namespace sinew {
 
 struct StVK : SigmaModel<StVK> {
   static constexpr const char* name = "stvk";
+  static constexpr const char* equation = "Eq. 50";
+  using Options = NoOptions;
   double mu = 0, lambda = 0, kappa = 0;
+
+  static StVK make(double mu_L, double lambda_L, const Options&) { return from_lame(mu_L, lambda_L, 0.0); }
+  std::string invalid() const { return ""; }
 
   static StVK from_lame(double mu_L, double lambda_L, double kappa = 0.0) {
     StVK m;
@@ -71,6 +78,29 @@ struct StVK : SigmaModel<StVK> {
       es.twist[k] = mu * (si * si - si * sj + sj * sj - 1.0) + lambda * tr + K1 * s[k];
     }
   }
+};
+
+// StVK with the Kikuuwe compression term (Eq. 51): the same energy with kappa > 0.
+struct StVKKikuuwe : StVK {
+  static constexpr const char* name = "stvk-kikuuwe";
+  static constexpr const char* equation = "Eq. 51";
+  struct Options {
+    std::optional<double> kappa;
+    template <class V>
+    void visit(V& v) {
+      v.optional("Kikuuwe kappa", kappa, "stvk-kikuuwe: compression stiffness kappa of Eq. 51 (default 1e4 E)",
+                 Range::positive());
+    }
+  };
+
+  static StVKKikuuwe make(double mu_L, double lambda_L, const Options& o) {
+    // The term is tiny near J = 1 (Eq. 51), so a useful kappa scales with the stiffness: 1e4 E by default.
+    const double E = mu_L * (3.0 * lambda_L + 2.0 * mu_L) / (lambda_L + mu_L);
+    StVKKikuuwe m;
+    static_cast<StVK&>(m) = from_lame(mu_L, lambda_L, o.kappa.value_or(1.0e4 * E));
+    return m;
+  }
+  std::string invalid() const { return kappa > 0.0 ? "" : "'Kikuuwe kappa' must be positive"; }
 };
 
 }  // namespace sinew

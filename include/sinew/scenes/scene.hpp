@@ -1,32 +1,101 @@
-// A scene: mesh + material + boundary conditions + load path + initial state, built from the XML.
+// A scene: mesh + materials + boundary conditions + load path + initial state.
 //
 // Boundary conditions are listed under "Loading/Boundary conditions", one sublist each:
-//   Region  "face x-" ... "face z+" | "box" (with "Box lower", "Box upper") | "corners" (four
-//           non-coplanar corners of the bounding box) | "all"
-//   Motion  "fixed" | "rotate" (about "Axis" through "Center" by "Angle" radians in total) |
-//           "translate" (by "Displacement" in total)
+//   Region      "face x-" ... "face z+" | "box" (with "Box lower", "Box upper") | "corners" (four
+//               non-coplanar corners of the bounding box) | "all"
+//   Motion      "fixed" | "rotate" (about "Axis" through "Center" by "Angle" radians in total) |
+//               "translate" (by "Displacement" in total)
+//   Components  which displacement components the condition prescribes: "xyz" (default), or a subset
+//               such as "z" (a roller on a symmetry plane) or "xy"; the others stay free
 // Motions are applied as load fraction t goes from 0 to 1 over "Steps" quasi-static steps: the
 // prescribed displacement at t is the motion with t * Angle or t * Displacement. "Body force" (force per
 // reference volume, e.g. density * gravity) is ramped the same way.
 #pragma once
 
 #include <sinew/algebra/elastic_system.hpp>
-#include <sinew/driver/config.hpp>
+#include <sinew/core/section.hpp>
+#include <sinew/materials/parameters.hpp>
 
 #include <memory>
 
 namespace sinew {
 
-Teuchos::ParameterList valid_loading_parameters();
-Teuchos::ParameterList valid_boundary_condition_parameters();
-
-struct BoundaryCondition {
+// One boundary condition as the XML gives it.
+struct BoundaryConditionParameters {
   enum class Motion { Fixed, Rotate, Translate };
-  std::string name, region;
+  std::string region, components;
   Motion motion = Motion::Fixed;
-  std::array<double, 3> axis{{0, 0, 1}}, center{{0, 0, 0}}, displacement{{0, 0, 0}};
+  std::array<double, 3> box_lower{}, box_upper{}, axis{}, center{}, displacement{};
   double angle = 0.0;
-  std::vector<int> nodes;  // local node indices (owned and ghost)
+
+  template <class V>
+  void visit(V& v) {
+    v.entry("Region", region, std::string("face z-"),
+            "which nodes: 'face x-' ... 'face z+' (a face of the bounding box), box, corners (four "
+            "non-coplanar corners of the bounding box), all");
+    v.choice("Motion", motion, Motion::Fixed,
+             Choices<Motion>{{"fixed", Motion::Fixed}, {"rotate", Motion::Rotate}, {"translate", Motion::Translate}},
+             "how the region moves");
+    v.entry("Components", components, std::string("xyz"),
+            "the displacement components prescribed: xyz, or a subset such as z (a roller) or xy");
+    v.entry("Box lower", box_lower, {0.0, 0.0, 0.0}, "box region: lower corner");
+    v.entry("Box upper", box_upper, {0.0, 0.0, 0.0}, "box region: upper corner");
+    v.entry("Axis", axis, {0.0, 0.0, 1.0}, "rotate: axis direction");
+    v.entry("Center", center, {0.0, 0.0, 0.0}, "rotate: a point on the axis");
+    v.entry("Angle", angle, 0.0, "rotate: total angle in radians, reached at the last step");
+    v.entry("Displacement", displacement, {0.0, 0.0, 0.0}, "translate: total displacement");
+  }
+  template <class Context>
+  void check(const Context& c) const {
+    if (motion == Motion::Rotate && !(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2] > 0.0))
+      c.fail("'Axis' must be a non-zero vector");
+    if (components.empty() || components.find_first_not_of("xyz") != std::string::npos)
+      c.fail("'Components' must be a non-empty combination of x, y and z, got \"" + components + "\"");
+    if (region == "box")
+      for (int k = 0; k < 3; ++k)
+        if (!(box_upper[k] >= box_lower[k])) c.fail("'Box upper' must not lie below 'Box lower' in any coordinate");
+  }
+};
+
+// The "Loading" section of a scene.
+struct LoadingParameters {
+  enum class Initial { Rest, Scramble };
+  int steps = 0, max_cuts = 0, scramble_seed = 0;
+  std::array<double, 3> body_force{};
+  Initial initial = Initial::Rest;
+  double scramble_scale = 0.0;
+  NamedSections<BoundaryConditionParameters> conditions;
+
+  template <class V>
+  void visit(V& v) {
+    v.entry("Steps", steps, 1, "number of quasi-static load steps", Range::closed(1, 1e6));
+    v.sections("Boundary conditions", conditions, "one sublist per condition");
+    v.entry("Body force", body_force, {0.0, 0.0, 0.0}, "force per reference volume, ramped with the load");
+    v.choice("Initial state", initial, Initial::Rest,
+             Choices<Initial>{{"rest", Initial::Rest}, {"scramble", Initial::Scramble}},
+             "the starting displacement: rest, or scramble (vertices placed at random, Fig. 3)");
+    v.entry("Scramble scale", scramble_scale, 2.0, "scramble: the vertices fill a box of this many times the rest volume",
+            Range::positive());
+    v.entry("Scramble seed", scramble_seed, 1, "scramble: random seed");
+    v.entry("Maximum cuts", max_cuts, 6,
+            "a step that fails is retried with half the load increment, at most this many times", Range::closed(0, 30));
+  }
+};
+
+// Everything a Scene is built from.
+struct SceneDescription {
+  std::string name, file;  // the scene's name (output file names) and its file (messages)
+  MeshParameters mesh;
+  MaterialParameters material;
+  LoadingParameters loading;
+};
+
+// A boundary condition resolved on this rank's nodes.
+struct BoundaryCondition {
+  std::string name;
+  BoundaryConditionParameters p;
+  std::array<bool, 3> prescribed{{true, true, true}};  // which components
+  std::vector<int> nodes;                              // local node indices (owned and ghost)
 
   // Prescribed displacement of a node at reference position X and load fraction t.
   std::array<double, 3> value(const std::array<double, 3>& X, double t) const;
@@ -34,13 +103,14 @@ struct BoundaryCondition {
 
 class Scene {
  public:
-  Scene(const SceneConfig& config, Teuchos::RCP<const Teuchos::Comm<int>> comm);
+  // Collective; throws InputError naming the file and entry at fault.
+  Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> comm);
 
   ElasticSystem& system() { return *system_; }
   const ElasticSystem& system() const { return *system_; }
   const std::vector<BoundaryCondition>& boundary_conditions() const { return bcs_; }
-  int steps() const { return steps_; }
-  int max_cuts() const { return max_cuts_; }
+  int steps() const { return loading_.steps; }
+  int max_cuts() const { return loading_.max_cuts; }
   const std::string& name() const { return name_; }
 
   // Sets the Dirichlet entries of u (owned DOFs) and the body force for load fraction t.
@@ -51,13 +121,9 @@ class Scene {
 
  private:
   std::string name_;
+  LoadingParameters loading_;
   std::unique_ptr<ElasticSystem> system_;
   std::vector<BoundaryCondition> bcs_;
-  int steps_ = 1, max_cuts_ = 6;
-  std::array<double, 3> body_{{0, 0, 0}};
-  std::string initial_ = "rest";
-  double scramble_scale_ = 2.0;
-  unsigned scramble_seed_ = 1;
   Kokkos::View<double* [3]>::HostMirror X_;  // reference coordinates of local nodes
 };
 

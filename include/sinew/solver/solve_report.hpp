@@ -1,0 +1,67 @@
+// What one nonlinear solve reports: its outcome as an enum (never a string to compare), iteration
+// counts and the time split the log and the performance suite read.
+#pragma once
+
+#include <string>
+
+namespace sinew {
+
+enum class SolveStatus {
+  Converged,
+  Interrupted,       // a stop was requested (SIGINT/SIGTERM) between Newton iterations
+  MaxIterations,     // no convergence within the iteration limit
+  NonFinite,         // NaN or Inf in the residual
+  LineSearchFailed,  // no step decreased the merit function
+  UndefinedEnergy,   // the end state has points where the energy is +inf (Neo-Hookean inverted)
+  SolverError        // an exception from the linear solver or preconditioner (see `detail`)
+};
+
+// One Newton iteration, for progress lines.
+struct NewtonIterate {
+  int iteration = 0;
+  double residual = 0.0;  // L2 norm of the force residual after the iteration
+  double step = 0.0;      // line-search step length
+  int linear_iterations = 0;
+  bool exact_hessian = false;  // the iteration's direction came from the unprojected Hessian
+};
+
+struct SolveReport {
+  SolveStatus status = SolveStatus::SolverError;
+  std::string detail;  // the exception text of a SolverError
+  int max_iterations = 0;
+  bool exact_hessian_used = false;  // some Newton direction came from the unprojected Hessian
+  int newton_iterations = 0;
+  int linear_iterations = 0;  // CG iterations summed over the Newton iterations
+  double initial_residual = 0.0, final_residual = 0.0;
+  double seconds_assembly = 0.0, seconds_preconditioner = 0.0, seconds_linear = 0.0, seconds_line_search = 0.0,
+         seconds_total = 0.0;
+
+  bool converged() const { return status == SolveStatus::Converged; }
+
+  // Why it stopped, for people.
+  std::string reason() const {
+    switch (status) {
+      case SolveStatus::Converged: return "converged";
+      case SolveStatus::Interrupted: return "interrupted";
+      case SolveStatus::MaxIterations: return "no convergence in " + std::to_string(max_iterations) + " Newton iterations";
+      case SolveStatus::NonFinite: return "non-finite residual (NaN or Inf)";
+      case SolveStatus::LineSearchFailed: return "line search failed to decrease the merit function";
+      case SolveStatus::UndefinedEnergy: return "the state has inverted points where the energy is undefined (+inf)";
+      case SolveStatus::SolverError: return "solver exception: " + detail;
+    }
+    return "?";
+  }
+
+  // Adds the iteration counts and times of a later attempt at the same step.
+  void accumulate(const SolveReport& r) {
+    newton_iterations += r.newton_iterations;
+    linear_iterations += r.linear_iterations;
+    seconds_assembly += r.seconds_assembly;
+    seconds_preconditioner += r.seconds_preconditioner;
+    seconds_linear += r.seconds_linear;
+    seconds_line_search += r.seconds_line_search;
+    seconds_total += r.seconds_total;
+  }
+};
+
+}  // namespace sinew
