@@ -1,8 +1,12 @@
-// Core numerics: Jacobi eigen-solver, rotation-variant SVD and polar decomposition, validation helpers.
+// Core numerics (Jacobi eigen-solver, rotation-variant SVD and polar decomposition), name matching,
+// parameter sections and strict XML reading, and the Hessian policy's state machine.
 #include "material_test_utils.hpp"
 
 #include <sinew/core/errors.hpp>
+#include <sinew/core/parameters.hpp>
 #include <sinew/core/validation.hpp>
+#include <sinew/core/xml_input.hpp>
+#include <sinew/solver/hessian_policy.hpp>
 
 #include <Teuchos_ParameterList.hpp>
 #include <gtest/gtest.h>
@@ -111,4 +115,193 @@ TEST(Validation, ClosestNameAndUnknownKeys) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("did you mean 'Alpha'"), std::string::npos) << e.what();
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameter sections (core/parameters.hpp) and strict XML reading (core/xml_input.hpp)
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+struct Leaf {
+  double gain = 0.0;
+  template <class V>
+  void visit(V& v) {
+    v.entry("Gain", gain, 2.0, "a gain", Range::positive());
+  }
+};
+
+struct Section {
+  enum class Mode { Slow, Fast };
+  int count = 0;
+  double ratio = 0.0;
+  std::string name;
+  std::array<double, 3> axis{};
+  std::optional<double> limit;
+  Mode mode = Mode::Slow;
+  Leaf leaf;
+  NamedSections<Leaf> items;
+  template <class V>
+  void visit(V& v) {
+    v.entry("Count", count, 3, "a count", Range::closed(1, 1e6));
+    v.entry("Ratio", ratio, 0.5, "a ratio", Range::open(0.0, 1.0));
+    v.entry("Name", name, std::string("x"), "a name");
+    v.entry("Axis", axis, {0.0, 0.0, 1.0}, "an axis");
+    v.optional("Limit", limit, "a limit", Range::non_negative());
+    v.choice("Mode", mode, Mode::Slow, Choices<Mode>{{"slow", Mode::Slow}, {"fast", Mode::Fast}}, "a mode");
+    v.section("Leaf", leaf, "a fixed sublist");
+    v.sections("Items", items, "named sublists");
+  }
+  void check(const SectionContext& c) const {
+    if (count == 13) c.fail("'Count' 13 is unlucky");
+  }
+};
+
+std::string parse_error(const Teuchos::ParameterList& p) {
+  try {
+    parse_section<Section>(p, "Test");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Parameters, DefaultsComeFromTheDeclaration) {
+  const Section s = default_section<Section>();
+  EXPECT_EQ(s.count, 3);
+  EXPECT_EQ(s.ratio, 0.5);
+  EXPECT_EQ(s.axis[2], 1.0);
+  EXPECT_FALSE(s.limit.has_value());
+  EXPECT_EQ(s.leaf.gain, 2.0);
+  const Section parsed = parse_section<Section>(Teuchos::ParameterList(), "Test");
+  EXPECT_EQ(parsed.count, 3);
+  const Teuchos::ParameterList valid = declare_section<Section>("Test");
+  EXPECT_EQ(valid.get<int>("Count"), 3);
+  EXPECT_EQ(valid.sublist("Leaf").get<double>("Gain"), 2.0);
+}
+
+TEST(Parameters, ParsesValuesSublistsAndNamedSublistsInOrder) {
+  Teuchos::ParameterList p;
+  p.set("Count", 7);
+  p.set("Axis", Teuchos::Array<double>({1.0, 0.0, 0.0}));
+  p.set("Limit", 0.0);
+  p.set("Mode", std::string("fast"));
+  p.sublist("Leaf").set("Gain", 4.0);
+  p.sublist("Items").sublist("zeta").set("Gain", 1.0);
+  p.sublist("Items").sublist("alpha");
+  const Section s = parse_section<Section>(p, "Test");
+  EXPECT_EQ(s.count, 7);
+  EXPECT_EQ(s.axis[0], 1.0);
+  ASSERT_TRUE(s.limit.has_value());
+  EXPECT_EQ(*s.limit, 0.0);
+  EXPECT_EQ(s.mode, Section::Mode::Fast);
+  EXPECT_EQ(s.leaf.gain, 4.0);
+  ASSERT_EQ(s.items.size(), 2u);
+  EXPECT_EQ(s.items[0].first, "zeta");  // file order, not alphabetical
+  EXPECT_EQ(s.items[0].second.gain, 1.0);
+  EXPECT_EQ(s.items[1].second.gain, 2.0);  // default
+}
+
+TEST(Parameters, RejectionsNameTheCulprit) {
+  auto with = [](auto fill) {
+    Teuchos::ParameterList p;
+    fill(p);
+    return parse_error(p);
+  };
+  EXPECT_NE(with([](auto& p) { p.set("Count", 0); }).find("Test: 'Count' must lie in [1, 1e6], got 0"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Ratio", 1.0); }).find("'Ratio' must lie in (0, 1), got 1"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Ratio", std::nan("")); }).find("'Ratio' must lie in (0, 1), got nan"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Limit", -1.0); }).find("'Limit' must be >= 0, got -1"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Count", 2.0); }).find("'Count' in Test has type double, expected int"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Axis", Teuchos::Array<double>(std::vector<double>{1.0, 2.0})); }).find("'Axis' needs 3 entries, got 2"),
+            std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Axis", Teuchos::Array<double>({1.0, INFINITY, 0.0})); }).find("'Axis' entries must be finite, got inf"),
+            std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Mode", std::string("fsat")); }).find("'Mode' must be slow or fast, got \"fsat\" (did you mean \"fast\"?)"),
+            std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Cuont", 1); }).find("unknown entry 'Cuont' in Test (did you mean 'Count'?)"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Leaf", 1.0); }).find("'Leaf' in Test must be a sublist"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.sublist("Count"); }).find("'Count' in Test must be a parameter, not a sublist"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.sublist("Leaf").set("Gian", 1.0); }).find("unknown entry 'Gian' in Test/Leaf"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.sublist("Items").set("stray", 1); }).find("Test/Items/stray must be a sublist"), std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.sublist("Items").sublist("a").set("Gain", -1.0); }).find("Test/Items/a: 'Gain' must be positive"),
+            std::string::npos);
+  EXPECT_NE(with([](auto& p) { p.set("Count", 13); }).find("Test: 'Count' 13 is unlucky"), std::string::npos);
+}
+
+TEST(Parameters, NumbersAsPeopleWriteThem) {
+  EXPECT_EQ(format_number(1e6), "1e6");
+  EXPECT_EQ(format_number(100000), "100000");
+  EXPECT_EQ(format_number(0.5), "0.5");
+  EXPECT_EQ(format_number(-2.5e-7), "-2.5e-7");
+  EXPECT_EQ(or_list({"a", "b", "c"}), "a, b or c");
+  for (const char* good : {"1", "-2.5e3", " 3 ", ".5", "5.", "+1E-2", "0"}) EXPECT_TRUE(strict_number(good, false)) << good;
+  for (const char* bad : {"nan", "NaN", "inf", "-Infinity", "1e", "0x10", "1.0e5x", "", " ", "1e999", "--1", "1,0"})
+    EXPECT_FALSE(strict_number(bad, false)) << bad;
+  EXPECT_TRUE(strict_number("-12", true));
+  for (const char* bad : {"1.5", "99999999999", "1e3", "nan"}) EXPECT_FALSE(strict_number(bad, true)) << bad;
+}
+
+TEST(Parameters, StrictXmlReading) {
+  auto error = [](const std::string& xml) {
+    try {
+      read_parameter_text(xml, "t.xml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("<ParameterList name=\"A\"><Parameter name=\"x\" type=\"double\" value=\"1.5\"/></ParameterList>"), "");
+  EXPECT_NE(error("<ParameterList name=\"A\"><Parameter name=\"x\" type=\"Array(double)\" value=\"{nan, 1, 1}\"/></ParameterList>")
+                .find("'x' in A is declared Array(double) but its value 'nan' is not a finite number"),
+            std::string::npos);
+  EXPECT_NE(error("<ParameterList name=\"A\"><Parameter name=\"x\" type=\"int\" value=\"1\"/>"
+                  "<Parameter name=\"x\" type=\"int\" value=\"2\"/></ParameterList>")
+                .find("entry 'x' appears twice in A"),
+            std::string::npos);
+  EXPECT_NE(error("<ParameterList name=\"A\"><ParameterList name=\"B\"/><ParameterList name=\"B\"/></ParameterList>")
+                .find("entry 'B' appears twice in A"),
+            std::string::npos);
+  EXPECT_NE(error("<ParameterList name=\"A\">").find("malformed XML"), std::string::npos);
+  EXPECT_NE(error("<Other/>").find("the top element is <Other>"), std::string::npos);
+}
+
+TEST(HessianPolicy, EveryTransition) {
+  HessianPolicy never(0.0);
+  never.start(100.0);
+  EXPECT_FALSE(never.next_jacobian(1e-9, false));  // 0 disables the exact Hessian
+
+  HessianPolicy p(0.01);
+  p.start(100.0);
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_FALSE(p.next_jacobian(50.0, false));  // residual not small yet
+  EXPECT_FALSE(p.exact_used());
+  EXPECT_FALSE(p.next_jacobian(0.5, true));  // small but tangled
+  EXPECT_TRUE(p.next_jacobian(0.5, false));  // Projected -> Exact
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
+  EXPECT_TRUE(p.last_exact());
+  EXPECT_TRUE(p.exact_used());
+  p.step_taken(1.0);  // a full step keeps it
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
+  EXPECT_FALSE(p.next_jacobian(5.0, false));  // the residual grew: Exact -> Projected
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  p.line_search_failed();  // a projected direction's failure is not the exact Hessian's fault
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_TRUE(p.next_jacobian(0.5, false));
+  p.step_taken(0.25);  // a short step: Exact -> FellBack
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  EXPECT_FALSE(p.next_jacobian(1e-6, false));  // for the rest of the solve
+  EXPECT_TRUE(p.retry_projected());
+
+  p.start(100.0);  // a new solve starts over
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_FALSE(p.retry_projected());
+  EXPECT_TRUE(p.next_jacobian(0.1, false));
+  p.direction_not_descent();  // Exact -> FellBack
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  p.start(100.0);
+  EXPECT_TRUE(p.next_jacobian(0.1, false));
+  p.line_search_failed();  // Exact -> FellBack
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
 }

@@ -1,3 +1,5 @@
+// Name matching for messages: edit distance with swaps, the closest valid name, the unknown-entry check
+// for lists that are not declared as sections.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/validation.hpp>
 

@@ -1,3 +1,5 @@
+// Lattice meshes: the extruded 2D mask (box, voxelized cylinder), its z-slab distribution with one ghost
+// layer, hex8 or Kuhn-split tet4 cells, node selection by predicate.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
 #include <sinew/discretization/mesh.hpp>

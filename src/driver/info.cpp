@@ -1,3 +1,4 @@
+// sinew --version: versions, Kokkos backends compiled in and the one in use, MPI and HDF5.
 #include <sinew/driver/info.hpp>
 #include <sinew/version.hpp>
 

@@ -3,7 +3,7 @@
 // never a crash inside a library.
 #include <sinew/core/errors.hpp>
 #include <sinew/driver/config.hpp>
-#include <sinew/driver/exit_codes.hpp>
+#include <sinew/core/exit_codes.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/driver/signals.hpp>
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
     if (root) std::cout << sinew::build_info();
     return 0;
   }
-  return sinew::run_guarded(root, [&] {
+  return sinew::run_guarded("sinew", root, [&] {
     sinew::SceneConfig scene = sinew::read_scene(cl.scene);
     if (!cl.output.empty()) scene.params.output.directory = cl.output;
     if (cl.check) {

@@ -1,7 +1,7 @@
 // The load-step loop: each step is solved from the previous state with its prescribed motion, cut in
 // half on failure; progress lines, the log, step files and checkpoints follow every converged step.
 #include <sinew/core/errors.hpp>
-#include <sinew/driver/exit_codes.hpp>
+#include <sinew/core/exit_codes.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/driver/signals.hpp>
@@ -218,7 +218,7 @@ int Simulation::run() {
 
 int run_scene(const SceneConfig& config, const RunOptions& opt) {
   const bool root = Tpetra::getDefaultComm()->getRank() == 0;
-  return run_guarded(root, [&] {
+  return run_guarded("sinew", root, [&] {
     Simulation sim(config, opt);
     return sim.run();
   });

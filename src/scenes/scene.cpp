@@ -60,7 +60,9 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
   const Mesh& mesh = system_->mesh();
   X_ = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
 
-  std::vector<int> owner(mesh.local_nodes(), -1);  // which condition claims each node
+  // Which condition prescribes each (node, component): two conditions may share a node when they
+  // prescribe different components of it (rollers on two faces meeting at an edge).
+  std::vector<int> owner(3 * mesh.local_nodes(), -1);
   for (const auto& [bname, p] : loading_.conditions) {
     const std::string where = "Loading/Boundary conditions/" + bname;
     BoundaryCondition bc;
@@ -105,13 +107,16 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
     long long total = 0;
     Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
     if (total == 0) throw InputError(file + where + ": region \"" + region + "\" selects no node", InputErrorKind::EmptyRegion);
-    // A node under two conditions would be prescribed twice: refuse (all ranks agree, since the
-    // check is collective below).
+    // A component prescribed by two conditions would be prescribed twice: refuse (all ranks agree,
+    // since the check is collective below).
     int local_conflict = -1;
-    for (int nd : bc.nodes) {
-      if (owner[nd] >= 0 && local_conflict < 0) local_conflict = owner[nd];
-      owner[nd] = static_cast<int>(bcs_.size());
-    }
+    for (int nd : bc.nodes)
+      for (int c = 0; c < 3; ++c) {
+        if (!bc.prescribed[c]) continue;
+        int& o = owner[3 * nd + c];
+        if (o >= 0 && local_conflict < 0) local_conflict = o;
+        o = static_cast<int>(bcs_.size());
+      }
     int conflict = -1;
     Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, local_conflict, Teuchos::outArg(conflict));
     if (conflict >= 0)

@@ -368,6 +368,10 @@ struct NonlinearSolver::Impl {
     nox.sublist("Line Search").set("Method", p.line_search);
     nox.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
     nox.sublist("Line Search").sublist("More'-Thuente").set("Recovery Step", 0.0);
+    // The slope along the direction from the merit function (F . dir, exact for the energy) or a
+    // directional difference of F, rather than a Jacobian per trial point: NOX 13.2 otherwise applies
+    // a Jacobian it has not computed ("Jacobian is not valid"), and assembling one per trial is waste.
+    nox.sublist("Line Search").sublist("More'-Thuente").set("Optimize Slope Calculation", true);
     auto& newton = nox.sublist("Direction").sublist("Newton");
     newton.set("Forcing Term Method", p.forcing);
     newton.sublist("Linear Solver").set("Tolerance", p.linear_tolerance);
@@ -506,6 +510,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     if (report.detail.size() > 600) report.detail = report.detail.substr(0, 600) + "...";
   }
   report.exact_hessian_used = state.policy.exact_used();
+  report.exact_hessian_fell_back = state.policy.mode() == HessianPolicy::Mode::FellBack;
   m.model->attach(nullptr);
   report.seconds_total = since(t0);
   report.seconds_assembly = state.seconds_assembly;

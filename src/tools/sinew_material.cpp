@@ -4,6 +4,8 @@
 // shear (simple shear F = I + g e_x e_y^T), hydrostatic (F = s I, from 1 down through inversion),
 // F (one user-given deformation gradient).
 #include <sinew/core/errors.hpp>
+#include <sinew/core/exit_codes.hpp>
+#include <sinew/core/xml_input.hpp>
 #include <sinew/materials/parameters.hpp>
 
 #include <Kokkos_Core.hpp>
@@ -110,14 +112,12 @@ int run(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw InputError("option " + a + " needs a value");
+      if (i + 1 >= argc) throw UsageError("option " + a + " needs a value");
       return argv[++i];
     };
     auto number = [&](const std::string& v) {
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0') throw InputError("option " + a + ": '" + v + "' is not a number");
-      return x;
+      if (!strict_number(v, false)) throw UsageError("option " + a + ": '" + v + "' is not a finite number");
+      return std::strtod(v.c_str(), nullptr);
     };
     if (a == "--model") model = next();
     else if (a == "--E") E = number(next());
@@ -126,14 +126,18 @@ int run(int argc, char** argv) {
     else if (a == "--path") path = next();
     else if (a == "--min") tmin = number(next());
     else if (a == "--max") tmax = number(next());
-    else if (a == "--steps") steps = static_cast<int>(number(next()));
+    else if (a == "--steps") {
+      const std::string v = next();
+      if (!strict_number(v, true)) throw UsageError("--steps: '" + v + "' is not a whole number");
+      steps = std::atoi(v.c_str());
+    }
     else if (a == "--F") fstr = next();
     else if (a == "--output") out_file = next();
     else if (a == "--plot") plot_file = next();
     else if (a == "--param") {
       const std::string kv = next();
       const auto eq = kv.find('=');
-      if (eq == std::string::npos) throw InputError("--param expects KEY=VALUE, got '" + kv + "'");
+      if (eq == std::string::npos) throw UsageError("--param expects KEY=VALUE, got '" + kv + "'");
       mat.set(kv.substr(0, eq), number(kv.substr(eq + 1)));
     } else if (a == "--list") {
       for (const auto& n : material_model_names()) std::cout << n << "\n";
@@ -142,10 +146,10 @@ int run(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     } else {
-      throw InputError("unknown option '" + a + "'\n" + kUsage);
+      throw UsageError("unknown option '" + a + "'");
     }
   }
-  if (steps < 1 || steps > 1000000) throw InputError("--steps must be in [1, 1e6]");
+  if (steps < 1 || steps > 1000000) throw UsageError("--steps must be in [1, 1e6]");
   mat.set("Model", model);
   mat.set("Young modulus", E);
   mat.set("Poisson ratio", nu);
@@ -159,11 +163,11 @@ int run(int argc, char** argv) {
     std::string item;
     int k = 0;
     while (std::getline(ss, item, ',')) {
-      if (k >= 9) break;
-      F(k / 3, k % 3) = std::stod(item);
+      if (!strict_number(item, false)) throw UsageError("--F: '" + item + "' is not a finite number");
+      if (k < 9) F(k / 3, k % 3) = std::strtod(item.c_str(), nullptr);
       ++k;
     }
-    if (k != 9) throw InputError("--F needs nine comma-separated numbers, row by row");
+    if (k != 9) throw UsageError("--F needs nine comma-separated numbers, row by row (got " + std::to_string(k) + ")");
     rows.push_back({1.0, NAN, F});
   } else if (path == "uniaxial" || path == "shear" || path == "hydrostatic") {
     const double d0 = path == "hydrostatic" ? 1.0 : (path == "shear" ? 0.0 : 1.0);
@@ -186,13 +190,13 @@ int run(int argc, char** argv) {
       rows.push_back(r);
     }
   } else {
-    throw InputError("unknown --path '" + path + "' (uniaxial, shear, hydrostatic, F)");
+    throw UsageError("unknown --path '" + path + "' (uniaxial, shear, hydrostatic, F)");
   }
 
   std::ofstream file;
   if (!out_file.empty()) {
     file.open(out_file);
-    if (!file) throw InputError("cannot write '" + out_file + "'");
+    if (!file) throw InputError("cannot write '" + out_file + "'", InputErrorKind::File);
   }
   std::ostream& os = out_file.empty() ? std::cout : file;
   os.precision(10);
@@ -210,7 +214,7 @@ int run(int argc, char** argv) {
   });
   std::cerr << "sinew-material: " << describe(spec) << ", path " << path << ", " << rows.size() << " points\n";
   if (!plot_file.empty()) {
-    if (out_file.empty()) throw InputError("--plot needs --output FILE.csv");
+    if (out_file.empty()) throw UsageError("--plot needs --output FILE.csv");
     file.close();
     // Debian's python3 carries python3-matplotlib (scripts/deps.sh); another python3 earlier in PATH may not.
     const std::string py = std::ifstream("/usr/bin/python3").good() ? "/usr/bin/python3" : "python3";
@@ -224,13 +228,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const InputError& e) {
-    std::cerr << "sinew-material: input error: " << e.what() << "\n";
-    return 3;
-  } catch (const std::exception& e) {
-    std::cerr << "sinew-material: error: " << e.what() << "\n";
-    return 1;
-  }
+  return run_guarded("sinew-material", true, [&] { return run(argc, argv); });
 }

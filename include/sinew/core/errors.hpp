@@ -43,4 +43,9 @@ struct InputError : std::runtime_error {
   InputError prefixed(const std::string& prefix) const { return InputError(prefix + what(), kind); }
 };
 
+// A bad command line (exit code 2).
+struct UsageError : std::runtime_error {
+  explicit UsageError(const std::string& what) : std::runtime_error(what) {}
+};
+
 }  // namespace sinew

@@ -51,6 +51,13 @@ struct BoundaryConditionParameters {
       c.fail("'Axis' must be a non-zero vector");
     if (components.empty() || components.find_first_not_of("xyz") != std::string::npos)
       c.fail("'Components' must be a non-empty combination of x, y and z, got \"" + components + "\"");
+    if (region.rfind("face ", 0) == 0) {
+      const std::string f = region.substr(5);
+      if (f.size() != 2 || f[0] < 'x' || f[0] > 'z' || (f[1] != '-' && f[1] != '+'))
+        c.fail("'Region' face '" + f + "' is not one of x-, x+, y-, y+, z-, z+");
+    } else if (region != "box" && region != "corners" && region != "all") {
+      c.fail("unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all)");
+    }
     if (region == "box")
       for (int k = 0; k < 3; ++k)
         if (!(box_upper[k] >= box_lower[k])) c.fail("'Box upper' must not lie below 'Box lower' in any coordinate");

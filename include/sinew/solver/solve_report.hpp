@@ -29,7 +29,8 @@ struct SolveReport {
   SolveStatus status = SolveStatus::SolverError;
   std::string detail;  // the exception text of a SolverError
   int max_iterations = 0;
-  bool exact_hessian_used = false;  // some Newton direction came from the unprojected Hessian
+  bool exact_hessian_used = false;       // some Newton direction came from the unprojected Hessian
+  bool exact_hessian_fell_back = false;  // ... and the solve went back to projection (HessianPolicy)
   int newton_iterations = 0;
   int linear_iterations = 0;  // CG iterations summed over the Newton iterations
   double initial_residual = 0.0, final_residual = 0.0;
@@ -54,6 +55,8 @@ struct SolveReport {
 
   // Adds the iteration counts and times of a later attempt at the same step.
   void accumulate(const SolveReport& r) {
+    exact_hessian_used = exact_hessian_used || r.exact_hessian_used;
+    exact_hessian_fell_back = exact_hessian_fell_back || r.exact_hessian_fell_back;
     newton_iterations += r.newton_iterations;
     linear_iterations += r.linear_iterations;
     seconds_assembly += r.seconds_assembly;

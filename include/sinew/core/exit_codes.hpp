@@ -16,8 +16,8 @@ enum class ExitCode : int {
 inline int signal_exit_code(int sig) { return 128 + sig; }
 inline int code(ExitCode c) { return static_cast<int>(c); }
 
-// Runs fn; an InputError becomes "sinew: input error [kind]: ..." and exit 3, any other exception
-// "sinew: error: ..." and exit 1. Only `report` (rank 0) prints.
-int run_guarded(bool report, const std::function<int()>& fn);
+// Runs fn; a UsageError becomes "PROGRAM: ... (see --help)" and exit 2, an InputError becomes "PROGRAM: input error [kind]: ..." and exit 3, any other exception
+// "PROGRAM: error: ..." and exit 1. Only `report` (rank 0) prints.
+int run_guarded(const char* program, bool report, const std::function<int()>& fn);
 
 }  // namespace sinew
