@@ -35,12 +35,33 @@ std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t cou
 
 ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials)
     : comm_(std::move(comm)), mesh_(std::move(mesh)) {
-  // Blocks of elements by law: the default law first, then one per region, in the order given.
+  build_blocks(materials);
+  elements_ = compute_element_data(mesh_, *comm_);
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  std::vector<GO> owned_node_gids(mesh_.node_gid.begin(), mesh_.node_gid.begin() + n_owned);
+  owned_nodes_ = make_map(owned_node_gids, comm_);
+  owned_dofs_ = make_map(dof_gids(mesh_.node_gid, n_owned), comm_);
+  overlap_dofs_ = make_map(dof_gids(mesh_.node_gid, n_local), comm_);
+  importer_ = Teuchos::rcp(new Import(owned_dofs_, overlap_dofs_));
+  u_overlap_ = Teuchos::rcp(new Vector(overlap_dofs_));
+  fixed_ = Kokkos::View<char*>("fixed", 3 * n_local);
+  build_graph();
+  // Reference volume of the owned elements, summed over ranks.
+  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), elements_.wdetJ);
+  double local = 0.0;
+  for (std::size_t p = 0; p < mesh_.n_owned_elements * static_cast<std::size_t>(elements_.nqp); ++p) local += w(p);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(reference_volume_));
+}
+
+void ElasticSystem::build_blocks(const MaterialAssignment& materials) {
+  // One block per law: the default law first, then one per region in the order given; an element
+  // belongs to the last region listed that contains it. Kernels run block by block, so each law's
+  // kernel is its own instantiation with no per-element switch.
   const std::size_t ne = mesh_.local_elements();
   std::vector<int> block_of(ne, 0);
   std::vector<MaterialSpec> laws{materials.default_law};
+  const auto& names = mesh_.element_group_names;
   for (const auto& [name, law] : materials.regions) {
-    const auto& names = mesh_.element_group_names;
     const auto it = std::find(names.begin(), names.end(), name);
     if (it == names.end()) {
       std::string msg = "Material: '" + name + "' is not a volume group of the mesh; ";
@@ -64,18 +85,12 @@ ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh m
     Kokkos::deep_copy(blk.elements, h);
     blocks_.push_back(blk);
   }
-  elements_ = compute_element_data(mesh_, *comm_);
+}
 
-  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
-  std::vector<GO> owned_node_gids(mesh_.node_gid.begin(), mesh_.node_gid.begin() + n_owned);
-  owned_nodes_ = make_map(owned_node_gids, comm_);
-  owned_dofs_ = make_map(dof_gids(mesh_.node_gid, n_owned), comm_);
-  overlap_dofs_ = make_map(dof_gids(mesh_.node_gid, n_local), comm_);
-  importer_ = Teuchos::rcp(new Import(owned_dofs_, overlap_dofs_));
-  u_overlap_ = Teuchos::rcp(new Vector(overlap_dofs_));
-  fixed_ = Kokkos::View<char*>("fixed", 3 * n_local);
-
-  // Graph, once: each owned node couples to every node of every element around it.
+void ElasticSystem::build_graph() {
+  // Once per mesh: each owned node couples to every node of every element around it (all of which are
+  // on this rank, owned or ghost), so the graph needs no communication and Newton only refills values.
+  const std::size_t n_owned = mesh_.n_owned_nodes;
   auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
   const int npe = nodes_per_element(mesh_.type);
   std::vector<std::vector<int>> neighbours(n_owned);
@@ -92,6 +107,8 @@ ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh m
     nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
     for (int c = 0; c < 3; ++c) counts[3 * n + c] = 3 * nb.size();
   }
+  // The column map is the overlap map itself: local column index = overlap DOF index, which is what
+  // the kernels scatter with and what the Dirichlet elimination reads.
   auto graph = Teuchos::rcp(new CrsGraph(owned_dofs_, overlap_dofs_, Teuchos::ArrayView<const std::size_t>(counts)));
   std::vector<LO> cols;
   for (std::size_t n = 0; n < n_owned; ++n) {
@@ -102,12 +119,6 @@ ElasticSystem::ElasticSystem(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh m
   }
   graph->fillComplete(owned_dofs_, owned_dofs_);
   graph_ = graph;
-
-  // Reference volume of the owned elements, summed over ranks.
-  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), elements_.wdetJ);
-  double local = 0.0;
-  for (std::size_t p = 0; p < mesh_.n_owned_elements * static_cast<std::size_t>(elements_.nqp); ++p) local += w(p);
-  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(reference_volume_));
 }
 
 ElasticSystem::~ElasticSystem() = default;

@@ -29,6 +29,38 @@ Mat3 rotation(const std::array<double, 3>& k, double angle) {
   return R;
 }
 
+// The nodes a condition's 'Region' names, as a predicate on the reference position.
+std::function<bool(const std::array<double, 3>&)> region_predicate(const Mesh& mesh, const std::string& region,
+                                                                 const BoundaryConditionParameters& p, const std::string& where) {
+  if (region.rfind("face ", 0) == 0) {
+    try {
+      return face_predicate(mesh, region.substr(5));
+    } catch (const InputError& e) {
+      throw e.prefixed(where + ": 'Region' ");
+    }
+  }
+  if (region == "box") {
+    const auto lo = p.box_lower, hi = p.box_upper;
+    return [lo, hi](const std::array<double, 3>& X) {
+      for (int k = 0; k < 3; ++k)
+        if (X[k] < lo[k] || X[k] > hi[k]) return false;
+      return true;
+    };
+  }
+  if (region == "corners") {
+    // Four non-coplanar corners of the bounding box pin every rigid motion and nothing more.
+    const auto lo = mesh.lower, hi = mesh.upper;
+    const double tol = 1e-9 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    return [lo, hi, tol](const std::array<double, 3>& X) {
+      auto at = [&](int k, const std::array<double, 3>& c) { return std::fabs(X[k] - c[k]) <= tol; };
+      const bool x0 = at(0, lo), y0 = at(1, lo), z0 = at(2, lo);
+      return (x0 && y0 && z0) || (at(0, hi) && y0 && z0) || (x0 && at(1, hi) && z0) || (x0 && y0 && at(2, hi));
+    };
+  }
+  if (region == "all") return [](const std::array<double, 3>&) { return true; };
+  throw InputError(where + ": unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all)");
+}
+
 }  // namespace
 
 std::array<double, 3> BoundaryCondition::value(const std::array<double, 3>& X, double t) const {
@@ -72,41 +104,13 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
     for (double& a : bc.p.axis) a /= (n > 0.0 ? n : 1.0);
     for (int c = 0; c < 3; ++c) bc.prescribed[c] = p.components.find(static_cast<char>('x' + c)) != std::string::npos;
 
-    std::function<bool(const std::array<double, 3>&)> pred;
-    const std::string& region = p.region;
-    if (region.rfind("face ", 0) == 0) {
-      try {
-        pred = face_predicate(mesh, region.substr(5));
-      } catch (const InputError& e) {
-        throw e.prefixed(file + where + ": 'Region' ");
-      }
-    } else if (region == "box") {
-      const auto lo = p.box_lower, hi = p.box_upper;
-      pred = [lo, hi](const std::array<double, 3>& X) {
-        for (int k = 0; k < 3; ++k)
-          if (X[k] < lo[k] || X[k] > hi[k]) return false;
-        return true;
-      };
-    } else if (region == "corners") {
-      const auto lo = mesh.lower, hi = mesh.upper;
-      const double tol = 1e-9 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
-      pred = [lo, hi, tol](const std::array<double, 3>& X) {
-        auto at = [&](int k, const std::array<double, 3>& c) { return std::fabs(X[k] - c[k]) <= tol; };
-        const bool x0 = at(0, lo), y0 = at(1, lo), z0 = at(2, lo);
-        return (x0 && y0 && z0) || (at(0, hi) && y0 && z0) || (x0 && at(1, hi) && z0) || (x0 && y0 && at(2, hi));
-      };
-    } else if (region == "all") {
-      pred = [](const std::array<double, 3>&) { return true; };
-    } else {
-      throw InputError(file + where + ": unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all)");
-    }
-    bc.nodes = select_nodes(mesh, pred);
+    bc.nodes = select_nodes(mesh, region_predicate(mesh, p.region, p, file + where));
     long long owned = 0;
     for (int nd : bc.nodes)
       if (static_cast<std::size_t>(nd) < mesh.n_owned_nodes) ++owned;
     long long total = 0;
     Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
-    if (total == 0) throw InputError(file + where + ": region \"" + region + "\" selects no node", InputErrorKind::EmptyRegion);
+    if (total == 0) throw InputError(file + where + ": region \"" + p.region + "\" selects no node", InputErrorKind::EmptyRegion);
     // A component prescribed by two conditions would be prescribed twice: refuse (all ranks agree,
     // since the check is collective below).
     int local_conflict = -1;

@@ -103,12 +103,19 @@ double solve_lateral(const Model& m, double s) {
   return t;
 }
 
-int run(int argc, char** argv) {
-  std::string model = "stable-neohookean", path = "uniaxial", out_file, plot_file, fstr, projection = "clamp";
-  double E = 1e5, nu = 0.45;
+// The command line, checked.
+struct Options {
+  std::string path = "uniaxial", out_file, plot_file, fstr;
   double tmin = NAN, tmax = NAN;
   int steps = 48;
-  Teuchos::ParameterList mat("Material");
+  Teuchos::ParameterList material{"Material"};
+  bool done = false;  // --list or --help answered already
+};
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  std::string model = "stable-neohookean", projection = "clamp";
+  double E = 1e5, nu = 0.45;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -123,43 +130,46 @@ int run(int argc, char** argv) {
     else if (a == "--E") E = number(next());
     else if (a == "--nu") nu = number(next());
     else if (a == "--projection") projection = next();
-    else if (a == "--path") path = next();
-    else if (a == "--min") tmin = number(next());
-    else if (a == "--max") tmax = number(next());
+    else if (a == "--path") o.path = next();
+    else if (a == "--min") o.tmin = number(next());
+    else if (a == "--max") o.tmax = number(next());
     else if (a == "--steps") {
       const std::string v = next();
       if (!strict_number(v, true)) throw UsageError("--steps: '" + v + "' is not a whole number");
-      steps = std::atoi(v.c_str());
-    }
-    else if (a == "--F") fstr = next();
-    else if (a == "--output") out_file = next();
-    else if (a == "--plot") plot_file = next();
+      o.steps = std::atoi(v.c_str());
+    } else if (a == "--F") o.fstr = next();
+    else if (a == "--output") o.out_file = next();
+    else if (a == "--plot") o.plot_file = next();
     else if (a == "--param") {
       const std::string kv = next();
       const auto eq = kv.find('=');
       if (eq == std::string::npos) throw UsageError("--param expects KEY=VALUE, got '" + kv + "'");
-      mat.set(kv.substr(0, eq), number(kv.substr(eq + 1)));
+      o.material.set(kv.substr(0, eq), number(kv.substr(eq + 1)));
     } else if (a == "--list") {
       for (const auto& n : material_model_names()) std::cout << n << "\n";
-      return 0;
+      o.done = true;
     } else if (a == "-h" || a == "--help") {
       std::cout << kUsage;
-      return 0;
+      o.done = true;
     } else {
       throw UsageError("unknown option '" + a + "'");
     }
   }
-  if (steps < 1 || steps > 1000000) throw UsageError("--steps must be in [1, 1e6]");
-  mat.set("Model", model);
-  mat.set("Young modulus", E);
-  mat.set("Poisson ratio", nu);
-  mat.set("Projection", projection);
-  const MaterialSpec spec = material_from_parameters(mat);
+  if (o.steps < 1 || o.steps > 1000000) throw UsageError("--steps must be in [1, 1e6]");
+  if (!o.plot_file.empty() && o.out_file.empty()) throw UsageError("--plot needs --output FILE.csv");
+  o.material.set("Model", model);
+  o.material.set("Young modulus", E);
+  o.material.set("Poisson ratio", nu);
+  o.material.set("Projection", projection);
+  return o;
+}
 
+// The deformation gradients along the chosen path.
+std::vector<Row> load_path(const MaterialSpec& spec, Options& o) {
   std::vector<Row> rows;
-  if (path == "F") {
+  if (o.path == "F") {
     Mat3 F;
-    std::stringstream ss(fstr);
+    std::stringstream ss(o.fstr);
     std::string item;
     int k = 0;
     while (std::getline(ss, item, ',')) {
@@ -169,36 +179,31 @@ int run(int argc, char** argv) {
     }
     if (k != 9) throw UsageError("--F needs nine comma-separated numbers, row by row (got " + std::to_string(k) + ")");
     rows.push_back({1.0, NAN, F});
-  } else if (path == "uniaxial" || path == "shear" || path == "hydrostatic") {
-    const double d0 = path == "hydrostatic" ? 1.0 : (path == "shear" ? 0.0 : 1.0);
-    const double d1 = path == "hydrostatic" ? -0.5 : (path == "shear" ? 2.0 : 3.4);
-    if (std::isnan(tmin)) tmin = d0;
-    if (std::isnan(tmax)) tmax = d1;
-    double t_lat = 1.0;
-    for (int k = 0; k <= steps; ++k) {
-      const double t = tmin + (tmax - tmin) * k / steps;
-      Row r{t, NAN, Mat3::identity()};
-      if (path == "uniaxial") {
-        with_material(spec, [&](auto m) { t_lat = solve_lateral(m, t); });
-        r.lateral = t_lat;
-        r.F = Mat3::diag(t, t_lat, t_lat);
-      } else if (path == "shear") {
-        r.F(0, 1) = t;
-      } else {
-        r.F = Mat3::diag(t, t, t);
-      }
-      rows.push_back(r);
+    return rows;
+  }
+  if (o.path != "uniaxial" && o.path != "shear" && o.path != "hydrostatic")
+    throw UsageError("unknown --path '" + o.path + "' (uniaxial, shear, hydrostatic, F)");
+  // Default ranges: stretch 1 -> 3.4 (the paper's stretch test), shear 0 -> 2, scale 1 -> -0.5 (through
+  // collapse into inversion).
+  if (std::isnan(o.tmin)) o.tmin = o.path == "shear" ? 0.0 : 1.0;
+  if (std::isnan(o.tmax)) o.tmax = o.path == "hydrostatic" ? -0.5 : (o.path == "shear" ? 2.0 : 3.4);
+  for (int k = 0; k <= o.steps; ++k) {
+    const double t = o.tmin + (o.tmax - o.tmin) * k / o.steps;
+    Row r{t, NAN, Mat3::identity()};
+    if (o.path == "uniaxial") {
+      r.lateral = with_material(spec, [&](auto m) { return solve_lateral(m, t); });
+      r.F = Mat3::diag(t, r.lateral, r.lateral);
+    } else if (o.path == "shear") {
+      r.F(0, 1) = t;
+    } else {
+      r.F = Mat3::diag(t, t, t);
     }
-  } else {
-    throw UsageError("unknown --path '" + path + "' (uniaxial, shear, hydrostatic, F)");
+    rows.push_back(r);
   }
+  return rows;
+}
 
-  std::ofstream file;
-  if (!out_file.empty()) {
-    file.open(out_file);
-    if (!file) throw InputError("cannot write '" + out_file + "'", InputErrorKind::File);
-  }
-  std::ostream& os = out_file.empty() ? std::cout : file;
+void write_csv(std::ostream& os, const MaterialSpec& spec, const std::vector<Row>& rows) {
   os.precision(10);
   os << "stretch,J,psi,P00,P01,P02,P10,P11,P12,P20,P21,P22,lateral,min_eig_raw,min_eig_projected\n";
   with_material(spec, [&](auto m) {
@@ -212,14 +217,28 @@ int run(int argc, char** argv) {
          << "\n";
     }
   });
-  std::cerr << "sinew-material: " << describe(spec) << ", path " << path << ", " << rows.size() << " points\n";
-  if (!plot_file.empty()) {
-    if (out_file.empty()) throw UsageError("--plot needs --output FILE.csv");
+}
+
+int run(int argc, char** argv) {
+  Options o = parse_options(argc, argv);
+  if (o.done) return 0;
+  const MaterialSpec spec = material_from_parameters(o.material);
+  const std::vector<Row> rows = load_path(spec, o);
+  if (o.out_file.empty()) {
+    write_csv(std::cout, spec, rows);
+  } else {
+    std::ofstream file(o.out_file);
+    if (!file) throw InputError("cannot write '" + o.out_file + "'", InputErrorKind::File);
+    write_csv(file, spec, rows);
     file.close();
+    if (!file) throw InputError("writing '" + o.out_file + "' failed", InputErrorKind::File);
+  }
+  std::cerr << "sinew-material: " << describe(spec) << ", path " << o.path << ", " << rows.size() << " points\n";
+  if (!o.plot_file.empty()) {
     // Debian's python3 carries python3-matplotlib (scripts/deps.sh); another python3 earlier in PATH may not.
     const std::string py = std::ifstream("/usr/bin/python3").good() ? "/usr/bin/python3" : "python3";
-    const std::string cmd = py + " \"" SINEW_SOURCE_DIR "/scripts/plot_material.py\" \"" + out_file + "\" \"" +
-                            plot_file + "\" \"" + describe(spec) + "\"";
+    const std::string cmd = py + " \"" SINEW_SOURCE_DIR "/scripts/plot_material.py\" \"" + o.out_file + "\" \"" +
+                            o.plot_file + "\" \"" + describe(spec) + "\"";
     if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed (is python3-matplotlib installed?)");
   }
   return 0;

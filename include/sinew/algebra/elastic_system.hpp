@@ -93,6 +93,8 @@ class ElasticSystem {
   Teuchos::RCP<MultiVector> coordinates() const;
 
  private:
+  void build_blocks(const MaterialAssignment& materials);
+  void build_graph();
   EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
                        ElementFields<Kokkos::DefaultExecutionSpace::memory_space> fields) const;
   // Rows and columns of Dirichlet DOFs: off-diagonal entries zeroed, the diagonal kept (the sum of the

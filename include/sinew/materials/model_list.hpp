@@ -14,7 +14,8 @@
 #include <sinew/materials/stable_neohookean_nobarrier.hpp>
 #include <sinew/materials/stvk.hpp>
 
-// X(struct name): one line per model, in the order `sinew --parameters` lists them.
+// X(struct name): one line per model, in the order `sinew --parameters` lists them. Every line ends
+// with a backslash so that a new model is one added line; the comment below closes the list.
 #define SINEW_MATERIAL_MODELS(X) \
   X(StableNeoHookean)            \
   X(StableNeoHookeanNoBarrier)   \
@@ -25,4 +26,5 @@
   X(StVK)                        \
   X(StVKKikuuwe)                 \
   X(Fung)                        \
-  X(ArrudaBoyce)
+  X(ArrudaBoyce)                 \
+  // (end of the list)
