@@ -64,7 +64,7 @@ ElementData compute_element_data(const Mesh& mesh, const Teuchos::Comm<int>& com
   const int bad = mesh.type == ElementType::Hex8 ? fill<Hex8>(mesh, ed) : fill<Tet4>(mesh, ed);
   // Every rank must agree on the error: reduce the smallest bad global element id.
   const GlobalId none = std::numeric_limits<GlobalId>::max();
-  const GlobalId local_bad = bad == std::numeric_limits<int>::max() ? none : mesh.element_gid[bad];
+  const GlobalId local_bad = bad == std::numeric_limits<int>::max() ? none : mesh.element_label(bad);
   GlobalId global_bad = local_bad;
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, local_bad, Teuchos::outArg(global_bad));
   if (global_bad != none)

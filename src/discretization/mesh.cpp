@@ -4,6 +4,10 @@
 #include <sinew/core/hash.hpp>
 #include <sinew/discretization/mesh.hpp>
 
+#include <sinew/core/collective.hpp>
+
+#include <algorithm>
+
 #include <cmath>
 #include <sstream>
 
@@ -106,6 +110,10 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
 
   const std::size_t nloc = layers.size() * pat.nodes;
   m.node_gid.resize(nloc);
+  // Ghost layers: k0 - 1 belongs to the rank below, k1 to the rank above.
+  m.node_owner.assign(nloc, r);
+  for (std::size_t s = owned_layers; s < layers.size(); ++s)
+    for (int n2 = 0; n2 < pat.nodes; ++n2) m.node_owner[s * pat.nodes + n2] = layers[s] < k0 ? r - 1 : r + 1;
   m.n_owned_nodes = owned_layers * pat.nodes;
   m.X = Kokkos::View<double* [3]>("X", nloc);
   auto Xh = Kokkos::create_mirror_view(m.X);
@@ -166,7 +174,41 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
       }
   }
   Kokkos::deep_copy(m.conn, Ch);
+  m.source = spec.shape + " lattice";
+  number_for_output(m, comm);
   return m;
+}
+
+void number_for_output(Mesh& m, const Teuchos::Comm<int>& comm) {
+  MPI_Comm c = raw_comm(comm);
+  long long counts[2] = {static_cast<long long>(m.n_owned_nodes), static_cast<long long>(m.n_owned_elements)}, first[2] = {0, 0};
+  MPI_Exscan(counts, first, 2, MPI_LONG_LONG, MPI_SUM, c);
+  int rank = 0, P = 1;
+  MPI_Comm_rank(c, &rank);
+  MPI_Comm_size(c, &P);
+  if (rank == 0) first[0] = first[1] = 0;  // MPI_Exscan leaves rank 0's result undefined
+  m.first_output_node = first[0];
+  m.first_output_element = first[1];
+  m.node_output_id.assign(m.local_nodes(), -1);
+  for (std::size_t n = 0; n < m.n_owned_nodes; ++n) m.node_output_id[n] = first[0] + static_cast<GlobalId>(n);
+  // Ghosts: ask each owner for the row of each of its nodes (owned nodes are sorted by global id).
+  std::vector<std::vector<GlobalId>> ask(P);
+  for (std::size_t n = m.n_owned_nodes; n < m.local_nodes(); ++n) ask[m.node_owner[n]].push_back(m.node_gid[n]);
+  const auto asked = alltoallv(c, ask);
+  std::vector<std::vector<GlobalId>> answer(P);
+  const auto owned_end = m.node_gid.begin() + static_cast<std::ptrdiff_t>(m.n_owned_nodes);
+  for (int r = 0; r < P; ++r)
+    for (GlobalId g : asked[r]) {
+      const auto it = std::lower_bound(m.node_gid.begin(), owned_end, g);
+      if (it == owned_end || *it != g) throw std::logic_error("number_for_output: a ghost's owner does not own it");
+      answer[r].push_back(first[0] + (it - m.node_gid.begin()));
+    }
+  const auto answered = alltoallv(c, answer);
+  std::vector<std::size_t> next(P, 0);
+  for (std::size_t n = m.n_owned_nodes; n < m.local_nodes(); ++n) {
+    const int o = m.node_owner[n];
+    m.node_output_id[n] = answered[o][next[o]++];
+  }
 }
 
 std::vector<int> select_nodes(const Mesh& mesh, const std::function<bool(const std::array<double, 3>&)>& pred) {

@@ -1,10 +1,12 @@
 // Output: collective parallel HDF5 with checked closes, durable renames, and failures agreed on by all
 // ranks; the XDMF index; the CSV log; checkpoints that record where the load path stood.
+#include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/io/output.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
+#include <Tpetra_Import.hpp>
 #include <Tpetra_Vector.hpp>
 #include <hdf5.h>
 
@@ -22,44 +24,6 @@ namespace sinew {
 namespace fs = std::filesystem;
 
 namespace {
-
-MPI_Comm raw_comm(const Teuchos::Comm<int>& comm) {
-  if (auto mpi = dynamic_cast<const Teuchos::MpiComm<int>*>(&comm)) return *mpi->getRawMpiComm();
-  return MPI_COMM_SELF;
-}
-
-// Runs fn on every rank, then agrees: when any rank threw, every rank throws the lowest failing rank's
-// error (an InputError keeps its kind). Keeps a failure on one rank (a rename on rank 0, a full disk)
-// from leaving the others waiting in the next collective call.
-template <class Fn>
-void collectively(MPI_Comm comm, Fn&& fn) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  std::string msg;
-  int kind = -1;  // -1: not an InputError
-  int failed = size;
-  try {
-    fn();
-  } catch (const InputError& e) {
-    msg = e.what();
-    kind = static_cast<int>(e.kind);
-    failed = rank;
-  } catch (const std::exception& e) {
-    msg = e.what();
-    failed = rank;
-  }
-  int first = size;
-  MPI_Allreduce(&failed, &first, 1, MPI_INT, MPI_MIN, comm);
-  if (first == size) return;
-  int len = static_cast<int>(msg.size());
-  MPI_Bcast(&len, 1, MPI_INT, first, comm);
-  MPI_Bcast(&kind, 1, MPI_INT, first, comm);
-  msg.resize(len);
-  MPI_Bcast(msg.data(), len, MPI_CHAR, first, comm);
-  if (kind >= 0) throw InputError(msg, static_cast<InputErrorKind>(kind));
-  throw std::runtime_error(msg);
-}
 
 // HDF5 handle; close() reports a failure (a flush that did not reach the disk), the destructor only
 // cleans up on error paths.
@@ -230,10 +194,6 @@ void Output::write_mesh() {
   if (!params_.hdf5) return;
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes), e_owned = static_cast<long long>(m.n_owned_elements);
-  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0, first_el = e_owned > 0 ? m.element_gid[0] : 0;
-  // Slab partitions own contiguous ranges of global ids: checked, since the hyperslabs rely on it.
-  if (n_owned > 0 && m.node_gid[n_owned - 1] - first_node + 1 != n_owned)
-    throw std::logic_error("output: owned nodes are not a contiguous range of global ids");
   auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
   auto C = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.conn);
   std::vector<double> xyz(3 * n_owned);
@@ -242,10 +202,21 @@ void Output::write_mesh() {
   const int npe = nodes_per_element(m.type);
   std::vector<long long> conn(npe * e_owned);
   for (long long e = 0; e < e_owned; ++e)
-    for (int a = 0; a < npe; ++a) conn[npe * e + a] = m.node_gid[C(e, a)];
+    for (int a = 0; a < npe; ++a) conn[npe * e + a] = m.node_output_id[C(e, a)];
+  // Rows are in output order (rank by rank); the global ids (lattice position or file order, the same
+  // on any number of ranks) and a file's own tags stand beside them.
+  const std::vector<long long> node_gid(m.node_gid.begin(), m.node_gid.begin() + n_owned);
+  const std::vector<long long> element_gid(m.element_gid.begin(), m.element_gid.begin() + e_owned);
   write_file(dir_ + "/mesh.h5", raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
-    write_rows(file, "/coordinates", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, xyz.data(), tmp);
-    write_rows(file, "/connectivity", H5T_NATIVE_LLONG, m.global_elements, npe, first_el, e_owned, conn.data(), tmp);
+    write_rows(file, "/coordinates", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, xyz.data(), tmp);
+    write_rows(file, "/connectivity", H5T_NATIVE_LLONG, m.global_elements, npe, m.first_output_element, e_owned, conn.data(), tmp);
+    write_rows(file, "/node_gid", H5T_NATIVE_LLONG, m.global_nodes, 1, m.first_output_node, n_owned, node_gid.data(), tmp);
+    write_rows(file, "/element_gid", H5T_NATIVE_LLONG, m.global_elements, 1, m.first_output_element, e_owned, element_gid.data(), tmp);
+    if (!m.node_tag.empty()) {
+      write_rows(file, "/node_tag", H5T_NATIVE_LLONG, m.global_nodes, 1, m.first_output_node, n_owned, m.node_tag.data(), tmp);
+      write_rows(file, "/element_tag", H5T_NATIVE_LLONG, m.global_elements, 1, m.first_output_element, e_owned,
+                 m.element_tag.data(), tmp);
+    }
   });
 }
 
@@ -256,7 +227,7 @@ void Output::write_step(int step, double load, const Vector& u) {
   std::vector<double> psi, J;
   sys_.element_fields(u, psi, J);
   const long long n_owned = static_cast<long long>(m.n_owned_nodes), e_owned = static_cast<long long>(m.n_owned_elements);
-  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0, first_el = e_owned > 0 ? m.element_gid[0] : 0;
+  const long long first_node = m.first_output_node, first_el = m.first_output_element;
   auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
   auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
   std::vector<double> disp(3 * n_owned), pos(3 * n_owned);
@@ -334,12 +305,14 @@ void Output::log(const StepRecord& r) {
 void Output::write_checkpoint(const LoadState& at, const Vector& u) {
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes);
-  const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
   auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
   std::vector<double> disp(uv.data(), uv.data() + 3 * n_owned);
-  // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one.
+  const std::vector<long long> gid(m.node_gid.begin(), m.node_gid.begin() + n_owned);
+  // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one. Rows are
+  // in output order with each node's global id beside them, so any number of ranks can read it.
   write_file(checkpoint_file(), raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
-    write_rows(file, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, disp.data(), tmp);
+    write_rows(file, "/displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, disp.data(), tmp);
+    write_rows(file, "/node_gid", H5T_NATIVE_LLONG, m.global_nodes, 1, m.first_output_node, n_owned, gid.data(), tmp);
     write_attribute(file, "step", at.step);
     write_attribute(file, "load", at.load);
     write_attribute(file, "increment", at.increment);
@@ -399,23 +372,53 @@ LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& 
     if (H5Sget_simple_extent_ndims(space.id()) != 2 || H5Sget_simple_extent_dims(space.id(), dims, nullptr) != 2 ||
         dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
       fail("/displacement does not have the shape nodes x 3 of this mesh");
-    const long long n_owned = static_cast<long long>(m.n_owned_nodes);
-    const long long first_node = n_owned > 0 ? m.node_gid[0] : 0;
-    hsize_t start[2] = {static_cast<hsize_t>(first_node), 0}, cnt[2] = {static_cast<hsize_t>(n_owned), 3};
-    H5 mem(H5Screate_simple(2, cnt, nullptr), H5Sclose, "memspace");
-    if (n_owned > 0) {
-      H5Sselect_hyperslab(space.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
-    } else {
-      H5Sselect_none(space.id());
-      H5Sselect_none(mem.id());
-    }
-    std::vector<double> disp(3 * n_owned);
-    if (H5Dread(dset.id(), H5T_NATIVE_DOUBLE, mem.id(), space.id(), H5P_DEFAULT, disp.data()) < 0)
-      fail("cannot read /displacement");
+    // Each rank reads a block of rows, whatever the layout that wrote them; the rows then go to the
+    // ranks owning their nodes (a Tpetra import by global id).
+    int rank = 0, P = 1;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &P);
+    const long long N = m.global_nodes;
+    const long long r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
+    auto read_block = [&](const char* name, hid_t type, int cols, void* out) {
+      H5 d(H5Dopen2(file.id(), name, H5P_DEFAULT), H5Dclose, path + ": " + name);
+      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+      hsize_t start[2] = {static_cast<hsize_t>(r0), 0}, cnt[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
+      H5 mem(H5Screate_simple(cols == 1 ? 1 : 2, cnt, nullptr), H5Sclose, "memspace");
+      if (rows > 0) {
+        H5Sselect_hyperslab(sp.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+      } else {
+        H5Sselect_none(sp.id());
+        H5Sselect_none(mem.id());
+      }
+      if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail(std::string("cannot read ") + name);
+    };
+    std::vector<double> disp(3 * rows);
+    read_block("/displacement", H5T_NATIVE_DOUBLE, 3, disp.data());
     for (double d : disp)
       if (!std::isfinite(d)) fail("/displacement holds non-finite values (corrupt file?)");
-    auto uv = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
-    for (long long i = 0; i < 3 * n_owned; ++i) uv(i, 0) = disp[i];
+    std::vector<long long> gid(rows);
+    if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
+      read_block("/node_gid", H5T_NATIVE_LLONG, 1, gid.data());
+      for (long long g : gid)
+        if (g < 0 || g >= N) fail("/node_gid holds " + std::to_string(g) + ", not a node of this mesh (corrupt file?)");
+    } else {
+      for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;  // written before /node_gid existed: rows were ids
+    }
+    std::vector<GO> dofs(3 * rows);
+    for (long long k = 0; k < rows; ++k)
+      for (int c = 0; c < 3; ++c) dofs[3 * k + c] = 3 * gid[k] + c;
+    const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                                                Teuchos::ArrayView<const GO>(dofs), 0, sys.comm()));
+    Vector block(block_map);
+    {
+      auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (long long i = 0; i < 3 * rows; ++i) bv(i, 0) = disp[i];
+    }
+    u.putScalar(NAN);
+    u.doImport(block, Import(block_map, u.getMap()), Tpetra::INSERT);
+    auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t i = 0; i < uv.extent(0); ++i)
+      if (!std::isfinite(uv(i, 0))) fail("does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
   });
   return c;
 }

@@ -35,7 +35,7 @@ inline const Choices<ElementType>& element_choices() {
 
 // The "Mesh" section of a scene.
 struct MeshParameters {
-  std::string type;
+  std::string type, file;
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{};
   std::array<double, 3> lower{}, upper{};
@@ -44,8 +44,12 @@ struct MeshParameters {
 
   template <class V>
   void visit(V& v) {
-    v.choice("Type", type, std::string("box"), Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}},
-             "mesh generator: box, or cylinder (voxelized, axis along z)");
+    v.choice("Type", type, std::string("box"),
+             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}},
+             "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), or file");
+    v.entry("File", file, std::string(""),
+            "file: a Gmsh mesh (.msh, format 4.1 or 2.2, ASCII or binary) of tet4 or hex8 elements; a relative "
+            "path is taken from the scene file's folder");
     v.choice("Element", element, ElementType::Hex8, element_choices(),
              "hex8 (2x2x2 Gauss points) or tet4 (each lattice cell split into 6 tets, 1 point)");
     v.entry("Elements", cells, {4, 4, 4}, "cells along x, y, z (cylinder: across the diameter in x and y, along z)",
@@ -60,6 +64,14 @@ struct MeshParameters {
   }
   template <class Context>
   void check(const Context& c) const {
+    if (type == "file") {
+      if (file.empty()) c.fail("missing entry 'File' (the mesh file of Type file)", InputErrorKind::MissingEntry);
+      for (const char* lattice_only : {"Element", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
+        if (c.given(lattice_only))
+          c.fail("'" + std::string(lattice_only) + "' applies to generated meshes, not to Type file (the file says it)");
+      return;
+    }
+    if (c.given("File")) c.fail("'File' applies to Type file only");
     if (!c.given("Elements")) c.fail("missing entry 'Elements' (cells along x, y, z)", InputErrorKind::MissingEntry);
     for (int k = 0; k < 3; ++k)
       if (type == "box" && !(upper[k] > lower[k])) c.fail("'Upper corner' must exceed 'Lower corner' in every coordinate");
@@ -82,32 +94,62 @@ MeshSpec lattice_spec(const MeshParameters& p);
 using GlobalId = long long;
 
 // One rank's part of the mesh. Host-side vectors describe the layout; Views hold what kernels read.
+//
+// Global ids do not depend on the number of ranks (lattice position, or the file's order), so results
+// can be compared across layouts. Output files need each rank's rows contiguous, which a partition of
+// an unstructured mesh does not give: the output numbering renumbers owned nodes and elements rank by
+// rank (node_output_id), and files keep the global ids beside the data.
 struct Mesh {
   ElementType type = ElementType::Hex8;
   GlobalId global_nodes = 0, global_elements = 0;
   std::array<double, 3> lower{}, upper{};  // global bounding box of the reference configuration
+  std::string source;                      // what the mesh came from, for the run's header
 
   // Local nodes: the first n_owned_nodes are owned (ascending global id), the rest are ghosts.
   std::vector<GlobalId> node_gid;
   std::size_t n_owned_nodes = 0;
   Kokkos::View<double* [3]> X;  // reference coordinates of local nodes
+  std::vector<int> node_owner;  // the rank owning each local node
 
   // Local elements: the first n_owned_elements are owned, the rest are ghosts (needed for owned rows).
   std::vector<GlobalId> element_gid;
   std::size_t n_owned_elements = 0;
   Kokkos::View<int**> conn;  // element x nodes_per_element, local node indices
 
+  // Tags of a mesh file's nodes and elements (empty for lattices): messages and output use them.
+  std::vector<long long> node_tag, element_tag;
+
   // Element groups (the volume physical groups of a mesh file): their names, and each local element's
   // group (an index into the names, -1 for none; empty when the mesh has no groups).
   std::vector<std::string> element_group_names;
   std::vector<int> element_group;
+  // Node groups (surface, curve and point physical groups): names and, per group, the local nodes
+  // (owned and ghost) in it.
+  std::vector<std::string> node_group_names;
+  std::vector<std::vector<int>> node_group_nodes;
+
+  // Output numbering: owned nodes and elements are rows [first_output_*, first_output_* + n_owned_*)
+  // of the output files; node_output_id gives every local node's row (connectivity needs the ghosts').
+  GlobalId first_output_node = 0, first_output_element = 0;
+  std::vector<GlobalId> node_output_id;
+  long long reoriented = 0;  // elements of a mesh file reordered to positive orientation (all ranks)
 
   std::size_t local_nodes() const { return node_gid.size(); }
   std::size_t local_elements() const { return element_gid.size(); }
+  // The file's tag of an element for messages, or its global id for a lattice.
+  long long element_label(std::size_t local) const { return element_tag.empty() ? element_gid[local] : element_tag[local]; }
 };
+
+// Sets the output numbering (collective): exclusive prefix sums of the owned counts, and the ghost
+// nodes' rows from their owners.
+void number_for_output(Mesh& mesh, const Teuchos::Comm<int>& comm);
 
 // Builds this rank's slab of the mesh described by spec.
 Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm);
+
+// This rank's part of the mesh a "Mesh" section describes: a generated lattice, or a mesh file read by
+// rank 0 and distributed (collective; errors are raised on every rank).
+Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm);
 
 // Local node indices (owned and ghost) whose reference position satisfies pred.
 std::vector<int> select_nodes(const Mesh& mesh, const std::function<bool(const std::array<double, 3>&)>& pred);

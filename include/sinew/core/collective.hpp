@@ -1,0 +1,91 @@
+// MPI helpers that keep every rank in step: agreeing on a failure that happened on some ranks only
+// (so no rank is left waiting in a collective call), and the all-to-all exchange of plain records.
+#pragma once
+
+#include <sinew/core/errors.hpp>
+
+#include <Teuchos_Comm.hpp>
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <mpi.h>
+
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace sinew {
+
+inline MPI_Comm raw_comm(const Teuchos::Comm<int>& comm) {
+  if (auto mpi = dynamic_cast<const Teuchos::MpiComm<int>*>(&comm)) return *mpi->getRawMpiComm();
+  return MPI_COMM_SELF;
+}
+
+// Runs fn on every rank, then agrees: when any rank threw, every rank throws the lowest failing rank's
+// error (an InputError keeps its kind). fn must not itself call collectives that a failing rank skips.
+template <class Fn>
+void collectively(MPI_Comm comm, Fn&& fn) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  std::string msg;
+  int kind = -1;  // -1: not an InputError
+  int failed = size;
+  try {
+    fn();
+  } catch (const InputError& e) {
+    msg = e.what();
+    kind = static_cast<int>(e.kind);
+    failed = rank;
+  } catch (const std::exception& e) {
+    msg = e.what();
+    failed = rank;
+  }
+  int first = size;
+  MPI_Allreduce(&failed, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return;
+  int len = static_cast<int>(msg.size());
+  MPI_Bcast(&len, 1, MPI_INT, first, comm);
+  MPI_Bcast(&kind, 1, MPI_INT, first, comm);
+  msg.resize(len);
+  MPI_Bcast(msg.data(), len, MPI_CHAR, first, comm);
+  if (kind >= 0) throw InputError(msg, static_cast<InputErrorKind>(kind));
+  throw std::runtime_error(msg);
+}
+
+// send[r] goes to rank r; returns what each rank sent here, by source rank.
+template <class T>
+std::vector<std::vector<T>> alltoallv(MPI_Comm comm, const std::vector<std::vector<T>>& send) {
+  static_assert(std::is_trivially_copyable_v<T>, "records are sent as bytes");
+  int P = 1;
+  MPI_Comm_size(comm, &P);
+  std::vector<long long> sbytes(P), rbytes(P);
+  for (int r = 0; r < P; ++r) sbytes[r] = static_cast<long long>(send[r].size() * sizeof(T));
+  MPI_Alltoall(sbytes.data(), 1, MPI_LONG_LONG, rbytes.data(), 1, MPI_LONG_LONG, comm);
+  // Exchanged in chunks of at most 1 GB per pair, so that MPI's int counts never overflow.
+  const long long chunk = 1LL << 30;
+  std::vector<std::vector<T>> recv(P);
+  for (int r = 0; r < P; ++r) recv[r].resize(static_cast<std::size_t>(rbytes[r]) / sizeof(T));
+  for (long long offset = 0;; offset += chunk) {
+    std::vector<int> sc(P), rc(P), sd(P + 1, 0), rd(P + 1, 0);
+    long long left = 0;
+    for (int r = 0; r < P; ++r) {
+      sc[r] = static_cast<int>(std::max(0LL, std::min(chunk, sbytes[r] - offset)));
+      rc[r] = static_cast<int>(std::max(0LL, std::min(chunk, rbytes[r] - offset)));
+      sd[r + 1] = sd[r] + sc[r];
+      rd[r + 1] = rd[r] + rc[r];
+      left += sc[r] + rc[r];
+    }
+    long long any = left;
+    MPI_Allreduce(&left, &any, 1, MPI_LONG_LONG, MPI_SUM, comm);
+    if (any == 0) break;
+    std::vector<char> sbuf(sd[P]), rbuf(rd[P]);
+    for (int r = 0; r < P; ++r)
+      if (sc[r] > 0) std::memcpy(sbuf.data() + sd[r], reinterpret_cast<const char*>(send[r].data()) + offset, sc[r]);
+    MPI_Alltoallv(sbuf.data(), sc.data(), sd.data(), MPI_BYTE, rbuf.data(), rc.data(), rd.data(), MPI_BYTE, comm);
+    for (int r = 0; r < P; ++r)
+      if (rc[r] > 0) std::memcpy(reinterpret_cast<char*>(recv[r].data()) + offset, rbuf.data() + rd[r], rc[r]);
+  }
+  return recv;
+}
+
+}  // namespace sinew
