@@ -3,6 +3,10 @@
 #include <sinew/core/xml_input.hpp>
 #include <sinew/driver/config.hpp>
 
+#include <sinew/discretization/mesh_file.hpp>
+
+#include <algorithm>
+#include <filesystem>
 #include <sstream>
 
 namespace sinew {
@@ -18,7 +22,38 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
   return c;
 }
 
-SceneConfig read_scene(const std::string& path) { return make_scene(read_parameter_file(path), path); }
+SceneConfig read_scene(const std::string& path) {
+  SceneConfig c = make_scene(read_parameter_file(path), path);
+  // Files named in a scene are found next to it, wherever sinew runs.
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  auto resolve = [&](std::string& f) {
+    if (!f.empty() && std::filesystem::path(f).is_relative()) f = (folder / f).lexically_normal().string();
+  };
+  resolve(c.params.mesh.file);
+  resolve(c.params.skeleton.motion_file);
+  return c;
+}
+
+void check_mesh_file(const SceneConfig& c) {
+  const SceneFileParameters& p = c.params;
+  if (p.mesh.type != "file") return;
+  try {
+    const MeshGroups g = read_mesh_groups(p.mesh.file);
+    for (const auto& [region, law] : p.material.regions)
+      if (std::find(g.element_groups.begin(), g.element_groups.end(), region) == g.element_groups.end())
+        throw unknown_group("Material/" + region, region, {}, g.element_groups);
+    auto check_group = [&](const RegionParameters& r, const std::string& where) {
+      for (const auto& name : r.groups())
+        if (std::find(g.node_groups.begin(), g.node_groups.end(), name) == g.node_groups.end() &&
+            std::find(g.element_groups.begin(), g.element_groups.end(), name) == g.element_groups.end())
+          throw unknown_group(where, name, g.node_groups, g.element_groups);
+    };
+    for (const auto& [name, bc] : p.loading.conditions) check_group(bc.region, "Loading/Boundary conditions/" + name);
+    for (const auto& [name, bone] : p.skeleton.bones) check_group(bone.region, "Skeleton/Bones/" + name);
+  } catch (const InputError& e) {
+    throw e.prefixed(c.file + ": ");
+  }
+}
 
 std::string parameter_reference() {
   std::ostringstream os;
@@ -33,14 +68,23 @@ std::string describe(const SceneConfig& c) {
   os.precision(6);
   os << "scene: " << p.scene << " (" << c.file << ")\n";
   if (!p.description.empty()) os << "  " << p.description << "\n";
-  os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x "
-     << p.mesh.cells[1] << " x " << p.mesh.cells[2] << " cells\n";
+  if (p.mesh.type == "file")
+    os << "mesh: file " << p.mesh.file << "\n";
+  else
+    os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
+       << " x " << p.mesh.cells[2] << " cells\n";
   os << "material: " << describe(p.material.law.spec()) << "\n";
   for (const auto& [region, law] : p.material.regions) os << "  region " << region << ": " << describe(law.spec()) << "\n";
   os << "loading: " << p.loading.steps << " step" << (p.loading.steps > 1 ? "s" : "") << ", "
      << p.loading.conditions.size() << " boundary condition" << (p.loading.conditions.size() == 1 ? "" : "s") << "\n";
   for (const auto& [name, bc] : p.loading.conditions)
-    os << "  " << name << ": " << bc.region << ", components " << bc.components << "\n";
+    os << "  " << name << ": " << bc.region.region << ", components " << bc.components << "\n";
+  if (!p.skeleton.bones.empty()) {
+    os << "skeleton: " << p.skeleton.bones.size() << " bones" << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
+    for (const auto& [name, b] : p.skeleton.bones)
+      os << "  " << name << ": " << b.region.region << (b.parent.empty() ? "" : ", child of " + b.parent) << ", "
+         << b.keyframes.size() << " keyframes\n";
+  }
   os << "solver: |F| < " << p.solver.absolute_tolerance << ", at most " << p.solver.max_iterations
      << " Newton iterations, line search " << p.solver.line_search << " on the " << p.solver.merit << ", CG with "
      << p.solver.preconditioner << "\n";

@@ -130,6 +130,7 @@ int main(int argc, char** argv) {
     sinew::SceneConfig scene = sinew::read_scene(cl.scene);
     if (!cl.output.empty()) scene.params.output.directory = cl.output;
     if (cl.check) {
+      sinew::check_mesh_file(scene);
       if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
       return 0;
     }

@@ -97,6 +97,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   while (at_.load < target - 1e-14) {
     const double t = std::min(at_.load + dt, target);
     trial->assign(*u_);
+    scene.predict(at_.load, t, *trial);
     scene.apply_load(t, *trial);
     if (talk_) {
       const double done = at_.load - start_load_, elapsed = wall_seconds() - started_;

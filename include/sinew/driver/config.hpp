@@ -19,6 +19,7 @@ struct SceneFileParameters {
   MeshParameters mesh;
   MaterialParameters material;
   LoadingParameters loading;
+  SkeletonParameters skeleton;
   SolverParameters solver;
   OutputParameters output;
 
@@ -29,6 +30,7 @@ struct SceneFileParameters {
     v.section("Mesh", mesh, "the mesh: generator and resolution (required)");
     v.section("Material", material, "hyperelastic law(s) (required)");
     v.section("Loading", loading, "boundary conditions, body force and load steps");
+    v.section("Skeleton", skeleton, "bones that drive the flesh");
     v.section("Solver", solver, "Newton, CG and multigrid parameters");
     v.section("Output", output, "HDF5/XDMF fields, log and checkpoints");
   }
@@ -43,11 +45,18 @@ struct SceneConfig {
   std::string file;             // for messages
   SceneFileParameters params;   // every section, parsed and checked
 
-  SceneDescription scene() const { return {params.scene, file, params.mesh, params.material, params.loading}; }
+  SceneDescription scene() const {
+    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton};
+  }
 };
 
-// Reads and validates a scene file. Throws InputError naming the file and the entry at fault.
+// Reads and validates a scene file (paths in it taken from its folder). Throws InputError naming the
+// file and the entry at fault.
 SceneConfig read_scene(const std::string& path);
+
+// What `sinew --check` adds to reading: a mesh file's header, and the group names the scene uses
+// (material regions, 'group NAME' regions) checked against it. Throws InputError.
+void check_mesh_file(const SceneConfig& scene);
 
 // Validates a parameter list already in memory; `name` stands for the file in messages.
 SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const std::string& name);

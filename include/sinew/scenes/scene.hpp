@@ -1,21 +1,25 @@
-// A scene: mesh + materials + boundary conditions + load path + initial state.
+// A scene: mesh + materials + boundary conditions + skeleton + load path + initial state.
 //
 // Boundary conditions are listed under "Loading/Boundary conditions", one sublist each:
-//   Region      "face x-" ... "face z+" | "box" (with "Box lower", "Box upper") | "corners" (four
-//               non-coplanar corners of the bounding box) | "all"
+//   Region      which nodes (see region.hpp): a face of the bounding box, box, corners, all,
+//               'group NAME' (a physical group of the mesh file), segment
 //   Motion      "fixed" | "rotate" (about "Axis" through "Center" by "Angle" radians in total) |
 //               "translate" (by "Displacement" in total)
 //   Components  which displacement components the condition prescribes: "xyz" (default), or a subset
 //               such as "z" (a roller on a symmetry plane) or "xy"; the others stay free
 // Motions are applied as load fraction t goes from 0 to 1 over "Steps" quasi-static steps: the
 // prescribed displacement at t is the motion with t * Angle or t * Displacement. "Body force" (force per
-// reference volume, e.g. density * gravity) is ramped the same way.
+// reference volume, e.g. density * gravity) is ramped the same way. A "Skeleton" (skeleton.hpp) adds
+// bones whose nodes follow them.
 #pragma once
 
 #include <sinew/algebra/elastic_system.hpp>
 #include <sinew/core/section.hpp>
 #include <sinew/materials/parameters.hpp>
+#include <sinew/scenes/region.hpp>
+#include <sinew/scenes/skeleton.hpp>
 
+#include <functional>
 #include <memory>
 
 namespace sinew {
@@ -23,23 +27,20 @@ namespace sinew {
 // One boundary condition as the XML gives it.
 struct BoundaryConditionParameters {
   enum class Motion { Fixed, Rotate, Translate };
-  std::string region, components;
+  RegionParameters region;
+  std::string components;
   Motion motion = Motion::Fixed;
-  std::array<double, 3> box_lower{}, box_upper{}, axis{}, center{}, displacement{};
+  std::array<double, 3> axis{}, center{}, displacement{};
   double angle = 0.0;
 
   template <class V>
   void visit(V& v) {
-    v.entry("Region", region, std::string("face z-"),
-            "which nodes: 'face x-' ... 'face z+' (a face of the bounding box), box, corners (four "
-            "non-coplanar corners of the bounding box), all");
+    v.inline_section(region);
     v.choice("Motion", motion, Motion::Fixed,
              Choices<Motion>{{"fixed", Motion::Fixed}, {"rotate", Motion::Rotate}, {"translate", Motion::Translate}},
              "how the region moves");
     v.entry("Components", components, std::string("xyz"),
             "the displacement components prescribed: xyz, or a subset such as z (a roller) or xy");
-    v.entry("Box lower", box_lower, {0.0, 0.0, 0.0}, "box region: lower corner");
-    v.entry("Box upper", box_upper, {0.0, 0.0, 0.0}, "box region: upper corner");
     v.entry("Axis", axis, {0.0, 0.0, 1.0}, "rotate: axis direction");
     v.entry("Center", center, {0.0, 0.0, 0.0}, "rotate: a point on the axis");
     v.entry("Angle", angle, 0.0, "rotate: total angle in radians, reached at the last step");
@@ -51,16 +52,6 @@ struct BoundaryConditionParameters {
       c.fail("'Axis' must be a non-zero vector");
     if (components.empty() || components.find_first_not_of("xyz") != std::string::npos)
       c.fail("'Components' must be a non-empty combination of x, y and z, got \"" + components + "\"");
-    if (region.rfind("face ", 0) == 0) {
-      const std::string f = region.substr(5);
-      if (f.size() != 2 || f[0] < 'x' || f[0] > 'z' || (f[1] != '-' && f[1] != '+'))
-        c.fail("'Region' face '" + f + "' is not one of x-, x+, y-, y+, z-, z+");
-    } else if (region != "box" && region != "corners" && region != "all") {
-      c.fail("unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all)");
-    }
-    if (region == "box")
-      for (int k = 0; k < 3; ++k)
-        if (!(box_upper[k] >= box_lower[k])) c.fail("'Box upper' must not lie below 'Box lower' in any coordinate");
   }
 };
 
@@ -95,17 +86,16 @@ struct SceneDescription {
   MeshParameters mesh;
   MaterialParameters material;
   LoadingParameters loading;
+  SkeletonParameters skeleton;
 };
 
-// A boundary condition resolved on this rank's nodes.
+// A prescribed motion resolved on this rank's nodes: a boundary condition, or a bone.
 struct BoundaryCondition {
   std::string name;
-  BoundaryConditionParameters p;
   std::array<bool, 3> prescribed{{true, true, true}};  // which components
   std::vector<int> nodes;                              // local node indices (owned and ghost)
-
   // Prescribed displacement of a node at reference position X and load fraction t.
-  std::array<double, 3> value(const std::array<double, 3>& X, double t) const;
+  std::function<std::array<double, 3>(const std::array<double, 3>& X, double t)> value;
 };
 
 class Scene {
@@ -123,6 +113,11 @@ class Scene {
   // Sets the Dirichlet entries of u (owned DOFs) and the body force for load fraction t.
   void apply_load(double t, Vector& u);
 
+  // A better start for the step from load t0 to t1 than the state at t0: the free nodes carried along
+  // by the bones' motion (linear-blend skinning), when there is a skeleton and skinning is on.
+  void predict(double t0, double t1, Vector& u) const;
+  const Skeleton& skeleton() const { return *skeleton_; }
+
   // The starting displacement: zero, or the "scramble" of the paper's Fig. 3.
   void initial_state(Vector& u) const;
 
@@ -130,7 +125,9 @@ class Scene {
   std::string name_;
   LoadingParameters loading_;
   std::unique_ptr<ElasticSystem> system_;
+  std::unique_ptr<Skeleton> skeleton_;
   std::vector<BoundaryCondition> bcs_;
+  std::vector<char> free_;  // owned nodes with no prescribed component
   Kokkos::View<double* [3]>::HostMirror X_;  // reference coordinates of local nodes
 };
 

@@ -1,0 +1,171 @@
+// Bone-driven flesh (the paper's Fig. 1, 2, 7, 10): a "Skeleton" of rigid bones, each holding a region
+// of nodes that follows it exactly (Dirichlet), while the rest of the body is flesh solved
+// quasi-statically.
+//
+//   <ParameterList name="Skeleton">
+//     <ParameterList name="Bones">
+//       <ParameterList name="humerus">  Region (e.g. 'group humerus'), Pivot, Keyframes ... </ParameterList>
+//       <ParameterList name="radius">   Parent humerus, Pivot (the elbow), Keyframes ...  </ParameterList>
+//     </ParameterList>
+//   </ParameterList>
+//
+// A bone's motion is a rotation about its Pivot (reference coordinates) followed by a translation,
+// given at keyframes over the load fraction t in [0, 1] (an implicit rest keyframe at t = 0) and
+// interpolated between them (the angle linearly about a shared axis, otherwise quaternion slerp; the
+// translation linearly); a child bone's motion is composed after its parent's, so it moves with it.
+// Alternatively a CSV "Motion file" gives one world transform per bone per frame.
+//
+// Each load step starts from a better guess than the last pose: the free nodes are carried along by
+// linear-blend skinning of the bones' relative motion over the step, x <- sum_b w_b T_b(t) T_b(t0)^-1 x,
+// with weights falling off with the distance to each bone (1/d^p, normalized).
+#pragma once
+
+#include <sinew/core/small_matrix.hpp>
+#include <sinew/scenes/region.hpp>
+
+#include <Teuchos_Comm.hpp>
+
+#include <map>
+#include <memory>
+
+namespace sinew {
+
+// A rigid transform x -> R x + t.
+struct Rigid {
+  Mat3 R = Mat3::identity();
+  std::array<double, 3> t{{0.0, 0.0, 0.0}};
+  std::array<double, 3> apply(const std::array<double, 3>& x) const {
+    std::array<double, 3> y;
+    for (int i = 0; i < 3; ++i) y[i] = R(i, 0) * x[0] + R(i, 1) * x[1] + R(i, 2) * x[2] + t[i];
+    return y;
+  }
+  // this after other: x -> this(other(x))
+  Rigid after(const Rigid& o) const {
+    Rigid c;
+    c.R = R * o.R;
+    c.t = apply(o.t);
+    return c;
+  }
+  Rigid inverse() const {
+    Rigid i;
+    i.R = transpose(R);
+    for (int r = 0; r < 3; ++r) i.t[r] = -(i.R(r, 0) * t[0] + i.R(r, 1) * t[1] + i.R(r, 2) * t[2]);
+    return i;
+  }
+};
+
+// Rotation about a unit axis by an angle (Rodrigues).
+Mat3 axis_angle(const std::array<double, 3>& unit_axis, double angle);
+
+struct KeyframeParameters {
+  double time = 0.0, angle = 0.0;
+  std::array<double, 3> axis{}, translation{};
+
+  template <class V>
+  void visit(V& v) {
+    v.entry("Time", time, 1.0, "the load fraction of this pose, in (0, 1]", Range::closed(0.0, 1.0));
+    v.entry("Axis", axis, {0.0, 0.0, 1.0}, "rotation axis (about the bone's Pivot)");
+    v.entry("Angle", angle, 0.0, "rotation angle in radians, from the rest pose");
+    v.entry("Translation", translation, {0.0, 0.0, 0.0}, "translation after the rotation, from the rest pose");
+  }
+  template <class Context>
+  void check(const Context& c) const {
+    if (!(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2] > 0.0)) c.fail("'Axis' must be a non-zero vector");
+  }
+};
+
+struct BoneParameters {
+  std::string parent;
+  std::array<double, 3> pivot{};
+  RegionParameters region;
+  NamedSections<KeyframeParameters> keyframes;
+
+  template <class V>
+  void visit(V& v) {
+    v.entry("Parent", parent, std::string(""), "the bone this one moves with (none: a root bone)");
+    v.entry("Pivot", pivot, {0.0, 0.0, 0.0}, "the point the bone rotates about, in the rest pose (a joint)");
+    v.inline_section(region);
+    v.sections("Keyframes", keyframes, "one sublist per pose (any names), ordered by Time");
+  }
+};
+
+struct SkeletonParameters {
+  NamedSections<BoneParameters> bones;
+  std::string motion_file;
+  bool skinning = true;
+  double falloff = 0.0;
+
+  template <class V>
+  void visit(V& v) {
+    v.sections("Bones", bones, "one sublist per bone, named as the bone");
+    v.entry("Motion file", motion_file, std::string(""),
+            "CSV of world transforms instead of keyframes: lines 'frame,bone,r00,r01,r02,r10,r11,r12,r20,r21,r22,tx,ty,tz' "
+            "(frames 0..F-1 spread evenly over the load; a relative path is taken from the scene file's folder)");
+    v.entry("Skinning guess", skinning, true,
+            "start each step from the last pose carried along by linear-blend skinning of the bones' motion");
+    v.entry("Skinning falloff", falloff, 4.0, "p of the skinning weights 1/d^p (d: distance to a bone)", Range::closed(0.5, 16.0));
+  }
+  template <class Context>
+  void check(const Context& c) const;
+};
+
+// The skeleton on this rank's nodes. Collective to build.
+class Skeleton {
+ public:
+  Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
+
+  bool empty() const { return bones_.empty(); }
+  std::size_t size() const { return bones_.size(); }
+  const std::string& name(std::size_t b) const { return bones_[b].name; }
+  const std::vector<int>& nodes(std::size_t b) const { return bones_[b].nodes; }
+  // The bone's world transform at load fraction t (rest -> posed), parents composed.
+  Rigid transform(std::size_t b, double t) const;
+  // Carries the free owned nodes of displacement `u` (interleaved xyz, owned nodes) from load t0 to t1
+  // by linear-blend skinning. X: reference coordinates of local nodes; free[n]: node n is not attached.
+  void skin(double t0, double t1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const;
+  bool skinning() const { return skinning_; }
+
+ private:
+  struct Bone {
+    std::string name;
+    int parent = -1;
+    std::array<double, 3> pivot{};
+    std::vector<double> times;  // keyframes, with t = 0 first
+    std::vector<std::array<double, 3>> axes, translations;
+    std::vector<double> angles;
+    std::vector<Rigid> frames;  // world transforms per frame (motion file), else empty
+    std::vector<int> nodes;     // attached local nodes
+    std::array<double, 3> seg_a{}, seg_b{};  // the bone's segment for the skinning weights
+  };
+  Rigid local(const Bone& b, double t) const;
+  std::vector<Bone> bones_;
+  bool skinning_ = true;
+  double falloff_ = 4.0;
+  std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
+};
+
+template <class Context>
+void SkeletonParameters::check(const Context& c) const {
+  std::map<std::string, std::string> parent_of;
+  for (const auto& [name, b] : bones) parent_of[name] = b.parent;
+  for (const auto& [name, b] : bones) {
+    if (!b.parent.empty() && !parent_of.count(b.parent))
+      c.fail("Bones/" + name + ": 'Parent' \"" + b.parent + "\" is not a bone of this skeleton");
+    // A chain of parents must end at a root.
+    std::string at = name;
+    for (std::size_t k = 0; k <= bones.size(); ++k) {
+      at = parent_of[at];
+      if (at.empty()) break;
+      if (k == bones.size()) c.fail("Bones/" + name + ": its chain of parents is a cycle");
+    }
+    double last = 0.0;
+    for (const auto& [kname, k] : b.keyframes) {
+      if (!(k.time > last)) c.fail("Bones/" + name + "/Keyframes/" + kname + ": 'Time' must exceed the previous keyframe's (and 0)");
+      last = k.time;
+    }
+    if (!motion_file.empty() && !b.keyframes.empty())
+      c.fail("Bones/" + name + ": give keyframes or a 'Motion file', not both");
+  }
+}
+
+}  // namespace sinew

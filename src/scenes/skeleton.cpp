@@ -1,0 +1,315 @@
+// Skeleton: bone regions, keyframe (or motion-file) interpolation composed down the hierarchy, and the
+// linear-blend-skinning predictor for each load step.
+#include <sinew/core/collective.hpp>
+#include <sinew/core/sym_eigen.hpp>
+#include <sinew/core/xml_input.hpp>
+#include <sinew/scenes/skeleton.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace sinew {
+
+Mat3 axis_angle(const std::array<double, 3>& k, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle), t = 1 - c;
+  Mat3 R;
+  R(0, 0) = c + k[0] * k[0] * t;
+  R(0, 1) = k[0] * k[1] * t - k[2] * s;
+  R(0, 2) = k[0] * k[2] * t + k[1] * s;
+  R(1, 0) = k[1] * k[0] * t + k[2] * s;
+  R(1, 1) = c + k[1] * k[1] * t;
+  R(1, 2) = k[1] * k[2] * t - k[0] * s;
+  R(2, 0) = k[2] * k[0] * t - k[1] * s;
+  R(2, 1) = k[2] * k[1] * t + k[0] * s;
+  R(2, 2) = c + k[2] * k[2] * t;
+  return R;
+}
+
+namespace {
+
+std::array<double, 3> unit(const std::array<double, 3>& a) {
+  const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  return {a[0] / n, a[1] / n, a[2] / n};
+}
+
+// Unit quaternions (w, x, y, z) for interpolating rotations.
+using Quat = std::array<double, 4>;
+
+Quat quat_of(const Mat3& R) {
+  // Shepperd's method: pick the largest diagonal combination for accuracy.
+  const double tr = R(0, 0) + R(1, 1) + R(2, 2);
+  Quat q;
+  if (tr > 0.0) {
+    const double s = 2.0 * std::sqrt(tr + 1.0);
+    q = {0.25 * s, (R(2, 1) - R(1, 2)) / s, (R(0, 2) - R(2, 0)) / s, (R(1, 0) - R(0, 1)) / s};
+  } else if (R(0, 0) > R(1, 1) && R(0, 0) > R(2, 2)) {
+    const double s = 2.0 * std::sqrt(1.0 + R(0, 0) - R(1, 1) - R(2, 2));
+    q = {(R(2, 1) - R(1, 2)) / s, 0.25 * s, (R(0, 1) + R(1, 0)) / s, (R(0, 2) + R(2, 0)) / s};
+  } else if (R(1, 1) > R(2, 2)) {
+    const double s = 2.0 * std::sqrt(1.0 + R(1, 1) - R(0, 0) - R(2, 2));
+    q = {(R(0, 2) - R(2, 0)) / s, (R(0, 1) + R(1, 0)) / s, 0.25 * s, (R(1, 2) + R(2, 1)) / s};
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + R(2, 2) - R(0, 0) - R(1, 1));
+    q = {(R(1, 0) - R(0, 1)) / s, (R(0, 2) + R(2, 0)) / s, (R(1, 2) + R(2, 1)) / s, 0.25 * s};
+  }
+  return q;
+}
+
+Mat3 matrix_of(const Quat& q) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  Mat3 R;
+  R(0, 0) = 1 - 2 * (y * y + z * z);
+  R(0, 1) = 2 * (x * y - z * w);
+  R(0, 2) = 2 * (x * z + y * w);
+  R(1, 0) = 2 * (x * y + z * w);
+  R(1, 1) = 1 - 2 * (x * x + z * z);
+  R(1, 2) = 2 * (y * z - x * w);
+  R(2, 0) = 2 * (x * z - y * w);
+  R(2, 1) = 2 * (y * z + x * w);
+  R(2, 2) = 1 - 2 * (x * x + y * y);
+  return R;
+}
+
+Mat3 slerp(const Mat3& A, const Mat3& B, double s) {
+  Quat a = quat_of(A), b = quat_of(B);
+  double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+  if (d < 0.0) {  // the shorter way round
+    for (double& v : b) v = -v;
+    d = -d;
+  }
+  Quat q;
+  if (d > 0.9995) {
+    for (int k = 0; k < 4; ++k) q[k] = a[k] + s * (b[k] - a[k]);
+  } else {
+    const double th = std::acos(d), sa = std::sin((1 - s) * th) / std::sin(th), sb = std::sin(s * th) / std::sin(th);
+    for (int k = 0; k < 4; ++k) q[k] = sa * a[k] + sb * b[k];
+  }
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (double& v : q) v /= n;
+  return matrix_of(q);
+}
+
+double segment_distance(const double* X, const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  double ab[3], ax[3], len2 = 0.0, t = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    ab[k] = b[k] - a[k];
+    ax[k] = X[k] - a[k];
+    len2 += ab[k] * ab[k];
+    t += ab[k] * ax[k];
+  }
+  t = len2 > 0.0 ? std::clamp(t / len2, 0.0, 1.0) : 0.0;
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) d2 += (ax[k] - t * ab[k]) * (ax[k] - t * ab[k]);
+  return std::sqrt(d2);
+}
+
+// The motion file: per bone name, its world transforms frame by frame.
+std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the motion file", InputErrorKind::File);
+  std::map<std::string, std::map<long long, Rigid>> by_bone;
+  std::string line;
+  long lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line[0] == '#' || line.rfind("frame", 0) == 0) continue;  // comments, header
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string item; std::getline(ss, item, ',');) f.push_back(item);
+    const std::string at = path + ": line " + std::to_string(lineno) + ": ";
+    if (f.size() != 14) throw InputError(at + "expected 14 fields (frame, bone, 9 rotation entries, 3 translation entries)");
+    if (!strict_number(f[0], true)) throw InputError(at + "the frame '" + f[0] + "' is not a whole number");
+    Rigid T;
+    for (int k = 0; k < 12; ++k) {
+      if (!strict_number(f[2 + k], false)) throw InputError(at + "'" + f[2 + k] + "' is not a finite number");
+      const double v = std::strtod(f[2 + k].c_str(), nullptr);
+      if (k < 9)
+        T.R(k / 3, k % 3) = v;
+      else
+        T.t[k - 9] = v;
+    }
+    const Mat3 E = transpose(T.R) * T.R - Mat3::identity();
+    if (std::sqrt(frobenius2(E)) > 1e-6 || std::fabs(det(T.R) - 1.0) > 1e-6)
+      throw InputError(at + "the rotation is not a rotation (R^T R = I and det R = 1 to 1e-6)");
+    std::string bone = f[1];
+    bone.erase(0, bone.find_first_not_of(" \t"));
+    bone.erase(bone.find_last_not_of(" \t") + 1);
+    by_bone[bone][std::atoll(f[0].c_str())] = T;
+  }
+  std::map<std::string, std::vector<Rigid>> out;
+  for (auto& [bone, frames] : by_bone) {
+    long long expect = 0;
+    for (const auto& [frame, T] : frames) {
+      if (frame != expect) throw InputError(path + ": bone '" + bone + "' has no frame " + std::to_string(expect));
+      out[bone].push_back(T);
+      ++expect;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where)
+    : skinning_(p.skinning), falloff_(p.falloff) {
+  std::map<std::string, std::vector<Rigid>> frames;
+  if (!p.motion_file.empty()) frames = read_motion_file(p.motion_file);
+  std::size_t nframes = 0;
+  for (const auto& [name, bp] : p.bones) {
+    Bone b;
+    b.name = name;
+    b.pivot = bp.pivot;
+    b.times.push_back(0.0);
+    b.angles.push_back(0.0);
+    b.translations.push_back({0.0, 0.0, 0.0});
+    b.axes.push_back(bp.keyframes.empty() ? std::array<double, 3>{0, 0, 1} : unit(bp.keyframes.front().second.axis));
+    for (const auto& [kname, k] : bp.keyframes) {
+      b.times.push_back(k.time);
+      b.angles.push_back(k.angle);
+      b.axes.push_back(unit(k.axis));
+      b.translations.push_back(k.translation);
+    }
+    if (!p.motion_file.empty()) {
+      const auto it = frames.find(name);
+      if (it == frames.end()) throw InputError(where + "/Bones/" + name + ": the motion file has no frames for this bone");
+      if (nframes != 0 && it->second.size() != nframes)
+        throw InputError(p.motion_file + ": bone '" + name + "' has " + std::to_string(it->second.size()) + " frames, others " +
+                         std::to_string(nframes));
+      nframes = it->second.size();
+      b.frames = it->second;
+    }
+    b.nodes = select_region(mesh, comm, bp.region, where + "/Bones/" + name);
+    bones_.push_back(std::move(b));
+  }
+  for (std::size_t k = 0; k < bones_.size(); ++k)
+    for (std::size_t j = 0; j < bones_.size(); ++j)
+      if (p.bones[k].second.parent == bones_[j].name) bones_[k].parent = static_cast<int>(j);
+  for (const auto& [bone, f] : frames)
+    if (std::none_of(bones_.begin(), bones_.end(), [&](const Bone& b) { return b.name == bone; }))
+      throw InputError(p.motion_file + ": bone '" + bone + "' is not in the skeleton's Bones");
+
+  // Each bone's segment for the skinning weights: the principal axis of its attached nodes, spanning
+  // their extent along it (a point for a single node).
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  MPI_Comm c = raw_comm(comm);
+  for (Bone& b : bones_) {
+    double s[10] = {0};  // count, sum x (3), sum x x^T (6)
+    for (int n : b.nodes) {
+      if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
+      const double x[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
+      s[0] += 1;
+      for (int i = 0; i < 3; ++i) s[1 + i] += x[i];
+      s[4] += x[0] * x[0];
+      s[5] += x[1] * x[1];
+      s[6] += x[2] * x[2];
+      s[7] += x[0] * x[1];
+      s[8] += x[0] * x[2];
+      s[9] += x[1] * x[2];
+    }
+    MPI_Allreduce(MPI_IN_PLACE, s, 10, MPI_DOUBLE, MPI_SUM, c);
+    if (s[0] == 0) throw InputError(where + "/Bones/" + b.name + ": its region selects no node", InputErrorKind::EmptyRegion);
+    const double m[3] = {s[1] / s[0], s[2] / s[0], s[3] / s[0]};
+    double C[9] = {s[4] / s[0] - m[0] * m[0], s[7] / s[0] - m[0] * m[1], s[8] / s[0] - m[0] * m[2],
+                   s[7] / s[0] - m[0] * m[1], s[5] / s[0] - m[1] * m[1], s[9] / s[0] - m[1] * m[2],
+                   s[8] / s[0] - m[0] * m[2], s[9] / s[0] - m[1] * m[2], s[6] / s[0] - m[2] * m[2]};
+    double ev[3], Q[9];
+    jacobi_eigen<3>(C, ev, Q);
+    const int k = ev[0] >= ev[1] && ev[0] >= ev[2] ? 0 : (ev[1] >= ev[2] ? 1 : 2);
+    const double axis[3] = {Q[0 * 3 + k], Q[1 * 3 + k], Q[2 * 3 + k]};
+    double ext[2] = {HUGE_VAL, HUGE_VAL};  // -min, max of the projection
+    for (int n : b.nodes) {
+      if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
+      double proj = 0.0;
+      for (int i = 0; i < 3; ++i) proj += (Xh(n, i) - m[i]) * axis[i];
+      ext[0] = std::min(ext[0], proj);
+      ext[1] = std::min(ext[1], -proj);
+    }
+    MPI_Allreduce(MPI_IN_PLACE, ext, 2, MPI_DOUBLE, MPI_MIN, c);
+    for (int i = 0; i < 3; ++i) {
+      b.seg_a[i] = m[i] + ext[0] * axis[i];
+      b.seg_b[i] = m[i] - ext[1] * axis[i];
+    }
+  }
+  // Skinning weights of the owned nodes: 1/d^p to each bone, normalized; small ones dropped.
+  weights_.assign(mesh.n_owned_nodes, {});
+  if (bones_.empty()) return;
+  const double scale = std::max({mesh.upper[0] - mesh.lower[0], mesh.upper[1] - mesh.lower[1], mesh.upper[2] - mesh.lower[2]});
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n) {
+    const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
+    double total = 0.0;
+    std::vector<std::pair<int, double>> w;
+    for (std::size_t b = 0; b < bones_.size(); ++b) {
+      const double d = std::max(segment_distance(X, bones_[b].seg_a, bones_[b].seg_b), 1e-6 * scale);
+      w.emplace_back(static_cast<int>(b), std::pow(d / scale, -falloff_));
+      total += w.back().second;
+    }
+    for (auto& [b, v] : w) v /= total;
+    w.erase(std::remove_if(w.begin(), w.end(), [](const auto& bw) { return bw.second < 1e-4; }), w.end());
+    total = 0.0;
+    for (const auto& bw : w) total += bw.second;
+    for (auto& [b, v] : w) v /= total;
+    weights_[n] = std::move(w);
+  }
+}
+
+Rigid Skeleton::local(const Bone& b, double t) const {
+  if (!b.frames.empty()) {  // world transforms from the motion file: no parent to compose
+    const double f = std::clamp(t, 0.0, 1.0) * static_cast<double>(b.frames.size() - 1);
+    const std::size_t k = std::min(static_cast<std::size_t>(f), b.frames.size() - 1);
+    if (k + 1 >= b.frames.size()) return b.frames.back();
+    const double s = f - static_cast<double>(k);
+    Rigid T;
+    T.R = slerp(b.frames[k].R, b.frames[k + 1].R, s);
+    for (int i = 0; i < 3; ++i) T.t[i] = (1 - s) * b.frames[k].t[i] + s * b.frames[k + 1].t[i];
+    return T;
+  }
+  std::size_t k = 0;
+  while (k + 1 < b.times.size() && b.times[k + 1] < t) ++k;
+  Mat3 R;
+  std::array<double, 3> d;
+  if (k + 1 >= b.times.size()) {  // after the last keyframe: hold it
+    R = axis_angle(b.axes[k], b.angles[k]);
+    d = b.translations[k];
+  } else {
+    const double s = std::clamp((t - b.times[k]) / (b.times[k + 1] - b.times[k]), 0.0, 1.0);
+    const auto& a0 = b.axes[k];
+    const auto& a1 = b.axes[k + 1];
+    if (a0[0] * a1[0] + a0[1] * a1[1] + a0[2] * a1[2] > 1.0 - 1e-12)  // one axis: the angle itself (beyond pi too)
+      R = axis_angle(a1, (1 - s) * b.angles[k] + s * b.angles[k + 1]);
+    else
+      R = slerp(axis_angle(a0, b.angles[k]), axis_angle(a1, b.angles[k + 1]), s);
+    for (int i = 0; i < 3; ++i) d[i] = (1 - s) * b.translations[k][i] + s * b.translations[k + 1][i];
+  }
+  // x -> R (x - pivot) + pivot + d
+  Rigid T;
+  T.R = R;
+  const auto Rp = T.apply(b.pivot);
+  for (int i = 0; i < 3; ++i) T.t[i] = b.pivot[i] - Rp[i] + d[i];
+  return T;
+}
+
+Rigid Skeleton::transform(std::size_t b, double t) const {
+  const Bone& bone = bones_[b];
+  const Rigid L = local(bone, t);
+  if (bone.parent < 0 || !bone.frames.empty()) return L;
+  return transform(static_cast<std::size_t>(bone.parent), t).after(L);
+}
+
+void Skeleton::skin(double t0, double t1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const {
+  std::vector<Rigid> M(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) M[b] = transform(b, t1).after(transform(b, t0).inverse());
+  for (std::size_t n = 0; n < owned; ++n) {
+    if (!free[n] || weights_[n].empty()) continue;
+    const std::array<double, 3> x{X[3 * n] + u[3 * n], X[3 * n + 1] + u[3 * n + 1], X[3 * n + 2] + u[3 * n + 2]};
+    std::array<double, 3> y{0.0, 0.0, 0.0};
+    for (const auto& [b, w] : weights_[n]) {
+      const auto z = M[b].apply(x);
+      for (int i = 0; i < 3; ++i) y[i] += w * z[i];
+    }
+    for (int i = 0; i < 3; ++i) u[3 * n + i] = y[i] - X[3 * n + i];
+  }
+}
+
+}  // namespace sinew
