@@ -4,6 +4,7 @@
 
 #include <sinew/core/errors.hpp>
 #include <sinew/core/parameters.hpp>
+#include <sinew/discretization/mesh_file.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
 #include <Tpetra_CrsGraph.hpp>
@@ -63,13 +64,7 @@ void ElasticSystem::build_blocks(const MaterialAssignment& materials) {
   const auto& names = mesh_.element_group_names;
   for (const auto& [name, law] : materials.regions) {
     const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) {
-      std::string msg = "Material: '" + name + "' is not a volume group of the mesh; ";
-      msg += names.empty() ? std::string("the mesh has none") : "its volume groups are " + or_list(names);
-      const std::string near = closest_name(name, names);
-      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
-      throw InputError(msg);
-    }
+    if (it == names.end()) throw unknown_group("Material/" + name, name, {}, names);
     const int group = static_cast<int>(it - names.begin());
     for (std::size_t e = 0; e < ne; ++e)
       if (!mesh_.element_group.empty() && mesh_.element_group[e] == group) block_of[e] = static_cast<int>(laws.size());

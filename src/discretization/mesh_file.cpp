@@ -2,6 +2,8 @@
 // never held in memory whole; only the nodes and the volume elements are kept. Written from the
 // "MSH file format" chapter of the Gmsh reference manual.
 #include <sinew/core/errors.hpp>
+#include <sinew/core/parameters.hpp>
+#include <sinew/core/validation.hpp>
 #include <sinew/core/small_matrix.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/shape_functions.hpp>
@@ -91,7 +93,8 @@ class Source {
     const std::string t = token();
     long long v = 0;
     const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size())
+    if (t.empty()) fail(std::string("the file ends where an integer (") + what + ") should be (truncated?)");
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size())
       fail(std::string("expected an integer (") + what + "), found '" + t.substr(0, 40) + "'");
     return v;
   }
@@ -99,7 +102,8 @@ class Source {
     const std::string t = token();
     double v = 0.0;
     const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
+    if (t.empty()) fail(std::string("the file ends where a number (") + what + ") should be (truncated?)");
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
       fail(std::string("expected a finite number (") + what + "), found '" + t.substr(0, 40) + "'");
     return v;
   }
@@ -590,6 +594,21 @@ MeshGroups read_mesh_groups(const std::string& path) {
         if (std::find(list.begin(), list.end(), std::to_string(p)) == list.end()) list.push_back(std::to_string(p));
       }
   return g;
+}
+
+InputError unknown_group(const std::string& where, const std::string& name, std::vector<std::string> node_groups,
+                         std::vector<std::string> element_groups) {
+  std::sort(node_groups.begin(), node_groups.end());
+  std::sort(element_groups.begin(), element_groups.end());
+  std::vector<std::string> all = node_groups;
+  all.insert(all.end(), element_groups.begin(), element_groups.end());
+  std::string msg = where + ": the mesh has no group '" + name + "'";
+  if (all.empty()) return InputError(msg + " (it has no physical groups at all)");
+  const std::string near = closest_name(name, all);
+  if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+  if (!node_groups.empty()) msg += "; its node groups: " + or_list(node_groups);
+  if (!element_groups.empty()) msg += "; its volume groups: " + or_list(element_groups);
+  return InputError(msg);
 }
 
 }  // namespace sinew

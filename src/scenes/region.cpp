@@ -3,6 +3,7 @@
 // on a ghost node comes from its owner (only the owner sees every element around it).
 #include <sinew/core/collective.hpp>
 #include <sinew/core/parameters.hpp>
+#include <sinew/discretization/mesh_file.hpp>
 #include <sinew/scenes/region.hpp>
 
 #include <algorithm>
@@ -64,19 +65,6 @@ std::function<bool(const std::array<double, 3>&)> predicate(const Mesh& mesh, co
 }
 
 }  // namespace
-
-InputError unknown_group(const std::string& where, const std::string& name, const std::vector<std::string>& node_groups,
-                         const std::vector<std::string>& element_groups) {
-  std::vector<std::string> all = node_groups;
-  all.insert(all.end(), element_groups.begin(), element_groups.end());
-  std::string msg = where + ": the mesh has no group '" + name + "'";
-  if (all.empty()) return InputError(msg + " (it has no physical groups at all)");
-  const std::string near = closest_name(name, all);
-  if (!near.empty()) msg += " (did you mean '" + near + "'?)";
-  if (!node_groups.empty()) msg += "; its node groups: " + or_list(node_groups);
-  if (!element_groups.empty()) msg += "; its volume groups: " + or_list(element_groups);
-  return InputError(msg);
-}
 
 namespace {
 

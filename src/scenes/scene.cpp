@@ -36,6 +36,16 @@ Displacement motion_of(const BoundaryConditionParameters& p) {
         return out;
       };
     }
+    case Motion::Affine: {
+      const auto G = p.gradient;
+      const auto c = p.center, d = p.displacement;
+      return [G, c, d](const std::array<double, 3>& X, double t) {
+        std::array<double, 3> out;
+        for (int i = 0; i < 3; ++i)
+          out[i] = t * (G[3 * i] * (X[0] - c[0]) + G[3 * i + 1] * (X[1] - c[1]) + G[3 * i + 2] * (X[2] - c[2]) + d[i]);
+        return out;
+      };
+    }
     case Motion::Fixed: break;
   }
   return [](const std::array<double, 3>&, double) { return std::array<double, 3>{0.0, 0.0, 0.0}; };

@@ -7,6 +7,7 @@
 // element. Nodes no volume element uses are left out.
 #pragma once
 
+#include <sinew/core/errors.hpp>
 #include <sinew/discretization/mesh.hpp>
 
 #include <string>
@@ -44,5 +45,10 @@ struct MeshGroups {
   std::vector<std::string> element_groups, node_groups;
 };
 MeshGroups read_mesh_groups(const std::string& path);
+
+// The error for a group name the mesh does not have, listing the names it has (sorted), with the
+// closest one as a suggestion. Empty node_groups: only volume groups are meant (material regions).
+InputError unknown_group(const std::string& where, const std::string& name, std::vector<std::string> node_groups,
+                         std::vector<std::string> element_groups);
 
 }  // namespace sinew

@@ -78,8 +78,4 @@ struct RegionParameters {
 std::vector<int> select_region(const Mesh& mesh, const Teuchos::Comm<int>& comm, const RegionParameters& r,
                                const std::string& where);
 
-// The error for a group name the mesh does not have, listing the names it has.
-InputError unknown_group(const std::string& where, const std::string& name, const std::vector<std::string>& node_groups,
-                         const std::vector<std::string>& element_groups);
-
 }  // namespace sinew

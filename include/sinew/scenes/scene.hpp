@@ -4,7 +4,8 @@
 //   Region      which nodes (see region.hpp): a face of the bounding box, box, corners, all,
 //               'group NAME' (a physical group of the mesh file), segment
 //   Motion      "fixed" | "rotate" (about "Axis" through "Center" by "Angle" radians in total) |
-//               "translate" (by "Displacement" in total)
+//               "translate" (by "Displacement" in total) | "affine" (u = G (X - Center) + Displacement
+//               in total, G the displacement "Gradient": patch tests, shear)
 //   Components  which displacement components the condition prescribes: "xyz" (default), or a subset
 //               such as "z" (a roller on a symmetry plane) or "xy"; the others stay free
 // Motions are applied as load fraction t goes from 0 to 1 over "Steps" quasi-static steps: the
@@ -26,25 +27,31 @@ namespace sinew {
 
 // One boundary condition as the XML gives it.
 struct BoundaryConditionParameters {
-  enum class Motion { Fixed, Rotate, Translate };
+  enum class Motion { Fixed, Rotate, Translate, Affine };
   RegionParameters region;
   std::string components;
   Motion motion = Motion::Fixed;
   std::array<double, 3> axis{}, center{}, displacement{};
+  std::array<double, 9> gradient{};
   double angle = 0.0;
 
   template <class V>
   void visit(V& v) {
     v.inline_section(region);
     v.choice("Motion", motion, Motion::Fixed,
-             Choices<Motion>{{"fixed", Motion::Fixed}, {"rotate", Motion::Rotate}, {"translate", Motion::Translate}},
+             Choices<Motion>{{"fixed", Motion::Fixed},
+                             {"rotate", Motion::Rotate},
+                             {"translate", Motion::Translate},
+                             {"affine", Motion::Affine}},
              "how the region moves");
     v.entry("Components", components, std::string("xyz"),
             "the displacement components prescribed: xyz, or a subset such as z (a roller) or xy");
     v.entry("Axis", axis, {0.0, 0.0, 1.0}, "rotate: axis direction");
     v.entry("Center", center, {0.0, 0.0, 0.0}, "rotate: a point on the axis");
     v.entry("Angle", angle, 0.0, "rotate: total angle in radians, reached at the last step");
-    v.entry("Displacement", displacement, {0.0, 0.0, 0.0}, "translate: total displacement");
+    v.entry("Displacement", displacement, {0.0, 0.0, 0.0}, "translate, affine: total displacement (of Center)");
+    v.entry("Gradient", gradient, {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+            "affine: the total displacement gradient G, row by row (F = I + G)");
   }
   template <class Context>
   void check(const Context& c) const {

@@ -1,0 +1,506 @@
+// Meshes from files and the skeleton that drives them: every Gmsh format reads the same mesh;
+// orientation is repaired and counted; the distribution gives every node and element one owner and
+// every rank the ghosts it needs; an affine patch test on a Gmsh mesh is exact for every model; a
+// twist on a Gmsh mesh is the same on 1 thread, 2 threads and 2 ranks; bone transforms compose
+// parents and interpolate keyframes and motion files as documented; bones move their nodes exactly.
+#include "tpetra_test_utils.hpp"
+
+#include <sinew/core/xml_input.hpp>
+#include <sinew/discretization/mesh_file.hpp>
+#include <sinew/driver/run.hpp>
+#include <sinew/materials/models.hpp>
+#include <sinew/scenes/scene.hpp>
+
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <Tpetra_Core.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+using namespace sinew;
+using sinew::test::gather;
+
+namespace {
+
+auto world() { return Tpetra::getDefaultComm(); }
+std::string tag() { return "_np" + std::to_string(world()->getSize()) + "_t" + std::to_string(Kokkos::DefaultExecutionSpace::concurrency()); }
+std::string mesh_path(const std::string& name) { return std::string(SINEW_SOURCE_DIR) + "/tests/meshes/" + name; }
+
+double tet_volume(const MeshFile& m, std::size_t e) {
+  const int* c = &m.conn[4 * e];
+  double a[3], b[3], d[3];
+  for (int k = 0; k < 3; ++k) {
+    a[k] = m.xyz[3 * c[1] + k] - m.xyz[3 * c[0] + k];
+    b[k] = m.xyz[3 * c[2] + k] - m.xyz[3 * c[0] + k];
+    d[k] = m.xyz[3 * c[3] + k] - m.xyz[3 * c[0] + k];
+  }
+  return (a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) + a[2] * (b[0] * d[1] - b[1] * d[0])) / 6.0;
+}
+
+// A parallelepiped hex (Gmsh order: bottom face 0-1-2-3 counter-clockwise seen from above, top 4-7).
+double hex_volume(const MeshFile& m, std::size_t e) {
+  const int* c = &m.conn[8 * e];
+  double a[3], b[3], d[3];
+  for (int k = 0; k < 3; ++k) {
+    a[k] = m.xyz[3 * c[1] + k] - m.xyz[3 * c[0] + k];
+    b[k] = m.xyz[3 * c[3] + k] - m.xyz[3 * c[0] + k];
+    d[k] = m.xyz[3 * c[4] + k] - m.xyz[3 * c[0] + k];
+  }
+  return a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) + a[2] * (b[0] * d[1] - b[1] * d[0]);
+}
+
+const std::vector<int>& node_group(const MeshFile& m, const std::string& name) {
+  for (std::size_t g = 0; g < m.node_group_names.size(); ++g)
+    if (m.node_group_names[g] == name) return m.node_group_nodes[g];
+  throw std::runtime_error("no node group " + name);
+}
+
+SceneConfig config(const std::string& xml, const std::string& out) {
+  SceneConfig c = make_scene(read_parameter_text(xml, "test scene"), "test scene");
+  c.params.output.directory = out;
+  return c;
+}
+
+// A scene on the Gmsh unit box (box.geo), with the given model, conditions and skeleton.
+std::string box_scene(const std::string& mesh, const std::string& model, double nu, const std::string& conditions,
+                      const std::string& skeleton = "", int steps = 1, bool hdf5 = false) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="gmsh_box"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="file"/>
+    <Parameter name="File" type="string" value=")x" + mesh_path(mesh) + R"x("/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value=")x" + model + R"x("/>
+    <Parameter name="Young modulus" type="double" value="1.0"/>
+    <Parameter name="Poisson ratio" type="double" value=")x" + std::to_string(nu) + R"x("/>
+  </ParameterList>)x" + skeleton + R"x(
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value=")x" + std::to_string(steps) + R"x("/>
+    <ParameterList name="Boundary conditions">)x" + conditions + R"x(
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Solver">
+    <Parameter name="Absolute tolerance" type="double" value="1.0e-11"/>
+    <Parameter name="Maximum iterations" type="int" value="60"/>
+  </ParameterList>
+  <ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value=")x" + (hdf5 ? "true" : "false") + R"x("/>
+    <Parameter name="Checkpoint every" type="int" value="0"/>
+  </ParameterList>
+</ParameterList>)x";
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::fabs(x));
+  return m;
+}
+double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double m = 0.0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
+  return m / std::max(max_abs(a), 1e-300);
+}
+
+// A file of this rank's own (ranks run the same test side by side).
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string dir = "test_results/meshes" + tag() + "_rank" + std::to_string(world()->getRank());
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+TEST(MeshFile, EveryGmshFormatReadsTheSameBox) {
+  const MeshFile ref = read_mesh_file(mesh_path("box_v41.msh"));
+  EXPECT_EQ(ref.format, "Gmsh MSH 4.1 ASCII");
+  ASSERT_EQ(ref.type, ElementType::Tet4);
+  EXPECT_EQ(ref.nodes(), 339u);
+  EXPECT_EQ(ref.elements(), 1125u);
+  double volume = 0.0, smallest = 1.0;
+  for (std::size_t e = 0; e < ref.elements(); ++e) {
+    volume += tet_volume(ref, e);
+    smallest = std::min(smallest, tet_volume(ref, e));
+  }
+  EXPECT_NEAR(volume, 1.0, 1e-12);  // the unit cube, every element positively oriented after reading
+  EXPECT_GT(smallest, 0.0);
+  EXPECT_EQ(ref.element_group_names, std::vector<std::string>{"body"});
+  for (int g : ref.element_group) EXPECT_EQ(g, 0);
+  const std::set<std::string> names(ref.node_group_names.begin(), ref.node_group_names.end());
+  EXPECT_EQ(names, (std::set<std::string>{"bottom", "top", "sides", "edge", "corner"}));
+  // Each group holds exactly the nodes on its geometry (box.geo: OCC box faces 5/6 are z = 0/1).
+  std::size_t on_bottom = 0;
+  for (std::size_t n = 0; n < ref.nodes(); ++n) on_bottom += ref.xyz[3 * n + 2] == 0.0;
+  EXPECT_EQ(node_group(ref, "bottom").size(), on_bottom);
+  for (int n : node_group(ref, "bottom")) EXPECT_EQ(ref.xyz[3 * n + 2], 0.0);
+  for (int n : node_group(ref, "top")) EXPECT_EQ(ref.xyz[3 * n + 2], 1.0);
+  for (int n : node_group(ref, "sides")) {
+    const double x = ref.xyz[3 * n], y = ref.xyz[3 * n + 1];
+    EXPECT_TRUE(x == 0.0 || x == 1.0 || y == 0.0 || y == 1.0) << "node " << ref.node_tag[n];
+  }
+  ASSERT_EQ(node_group(ref, "corner").size(), 1u);
+  for (int k = 0; k < 3; ++k) {
+    const double x = ref.xyz[3 * node_group(ref, "corner")[0] + k];
+    EXPECT_TRUE(x == 0.0 || x == 1.0);
+  }
+
+  for (const auto& [file, format] : std::vector<std::pair<std::string, std::string>>{
+           {"box_v41_bin.msh", "Gmsh MSH 4.1 binary"}, {"box_v22.msh", "Gmsh MSH 2.2 ASCII"}, {"box_v22_bin.msh", "Gmsh MSH 2.2 binary"}}) {
+    const MeshFile m = read_mesh_file(mesh_path(file));
+    EXPECT_EQ(m.format, format);
+    // Gmsh prints 16 significant digits in ASCII: equal to round-off between encodings.
+    ASSERT_EQ(m.xyz.size(), ref.xyz.size());
+    double dx = 0.0;
+    for (std::size_t i = 0; i < m.xyz.size(); ++i) dx = std::max(dx, std::fabs(m.xyz[i] - ref.xyz[i]));
+    EXPECT_LT(dx, 1e-15) << file;
+    EXPECT_EQ(m.conn, ref.conn) << file;
+    EXPECT_EQ(m.node_tag, ref.node_tag) << file;
+    EXPECT_EQ(m.element_tag, ref.element_tag) << file;
+    EXPECT_EQ(m.element_group, ref.element_group) << file;
+    EXPECT_EQ(m.reoriented, ref.reoriented) << file;
+    for (const auto& g : names) EXPECT_EQ(node_group(m, g), node_group(ref, g)) << file << " group " << g;
+  }
+  // The same encoding holds the same numbers to the bit.
+  EXPECT_EQ(read_mesh_file(mesh_path("box_v22.msh")).xyz, ref.xyz);
+  EXPECT_EQ(read_mesh_file(mesh_path("box_v22_bin.msh")).xyz, read_mesh_file(mesh_path("box_v41_bin.msh")).xyz);
+  const MeshGroups groups = read_mesh_groups(mesh_path("box_v22_bin.msh"));
+  EXPECT_EQ(groups.element_groups, std::vector<std::string>{"body"});
+  EXPECT_EQ(std::set<std::string>(groups.node_groups.begin(), groups.node_groups.end()), names);
+}
+
+TEST(MeshFile, HexahedraWithTwoVolumeGroups) {
+  const MeshFile m = read_mesh_file(mesh_path("hexbox_v41.msh"));
+  ASSERT_EQ(m.type, ElementType::Hex8);
+  EXPECT_EQ(m.nodes(), 112u);  // 4 x 4 x 7 lattice nodes
+  EXPECT_EQ(m.elements(), 54u);
+  double volume = 0.0;
+  for (std::size_t e = 0; e < m.elements(); ++e) {
+    EXPECT_NEAR(hex_volume(m, e), 1.0 / 27.0, 1e-12) << "element " << m.element_tag[e];
+    volume += hex_volume(m, e);
+  }
+  EXPECT_NEAR(volume, 2.0, 1e-12);
+  ASSERT_EQ(m.element_group_names.size(), 2u);
+  for (std::size_t e = 0; e < m.elements(); ++e) {
+    double z = 0.0;
+    for (int a = 0; a < 8; ++a) z += m.xyz[3 * m.conn[8 * e + a] + 2] / 8.0;
+    EXPECT_EQ(m.element_group_names[m.element_group[e]], z < 1.0 ? "lower" : "upper");
+  }
+  EXPECT_EQ(node_group(m, "floor").size(), 16u);
+}
+
+TEST(MeshFile, NegativelyOrientedElementsAreReorderedAndCounted) {
+  // Two tets of the unit corner, the second listed with negative orientation; and a hex listed upside down.
+  const std::string tets = write_file("inverted_tets.msh", R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+5
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+5 0 0 -1
+$EndNodes
+$Elements
+2
+1 4 2 1 1 1 2 3 4
+2 4 2 1 1 1 2 3 5
+$EndElements
+)");
+  const MeshFile m = read_mesh_file(tets);
+  EXPECT_EQ(m.reoriented, 1);
+  EXPECT_NEAR(tet_volume(m, 0), 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(tet_volume(m, 1), 1.0 / 6.0, 1e-15);
+
+  std::string hex = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n";
+  const int corners[8][3] = {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};  // top first
+  for (int a = 0; a < 8; ++a)
+    hex += std::to_string(a + 1) + " " + std::to_string(corners[a][0]) + " " + std::to_string(corners[a][1]) + " " +
+           std::to_string(corners[a][2]) + "\n";
+  hex += "$EndNodes\n$Elements\n1\n1 5 2 1 1 1 2 3 4 5 6 7 8\n$EndElements\n";
+  const MeshFile h = read_mesh_file(write_file("inverted_hex.msh", hex));
+  EXPECT_EQ(h.reoriented, 1);
+  EXPECT_NEAR(hex_volume(h, 0), 1.0, 1e-15);
+}
+
+TEST(Distribution, EveryNodeAndElementHasOneOwnerAndGhostsAreComplete) {
+  const SceneConfig c = config(box_scene("box_v41.msh", "stable-neohookean", 0.3, ""), "unused");
+  const Mesh mesh = build_scene_mesh(c.params.mesh, *world());
+  const MeshFile file = read_mesh_file(mesh_path("box_v41.msh"));  // every rank reads it, for the test
+  const auto comm = world();
+  EXPECT_EQ(mesh.global_nodes, 339);
+  EXPECT_EQ(mesh.global_elements, 1125);
+  long long owned[2] = {static_cast<long long>(mesh.n_owned_nodes), static_cast<long long>(mesh.n_owned_elements)}, total[2];
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, 2, owned, total);
+  EXPECT_EQ(total[0], 339);
+  EXPECT_EQ(total[1], 1125);
+  // Coordinates and connectivity by global id are the file's (global ids follow the file's order).
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  std::vector<char> here(file.nodes(), 0);
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
+    const auto g = static_cast<std::size_t>(mesh.node_gid[n]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(X(n, k), file.xyz[3 * g + k]);
+    EXPECT_EQ(mesh.node_tag[n], file.node_tag[g]);
+    EXPECT_EQ(mesh.node_owner[n] == comm->getRank(), n < mesh.n_owned_nodes);
+    here[g] = 1;
+  }
+  std::vector<int> around_here(file.nodes(), 0), around_all(file.nodes(), 0);
+  for (std::size_t e = 0; e < file.elements(); ++e)
+    for (int a = 0; a < 4; ++a) ++around_all[file.conn[4 * e + a]];
+  for (std::size_t e = 0; e < mesh.local_elements(); ++e) {
+    const auto g = static_cast<std::size_t>(mesh.element_gid[e]);
+    EXPECT_EQ(mesh.element_tag[e], file.element_tag[g]);
+    for (int a = 0; a < 4; ++a) {
+      EXPECT_EQ(mesh.node_gid[conn(e, a)], file.conn[4 * g + a]);
+      ++around_here[mesh.node_gid[conn(e, a)]];
+    }
+  }
+  // Every owned node sees all its elements on this rank (assembly needs no communication).
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n) {
+    const auto g = mesh.node_gid[n];
+    EXPECT_EQ(around_here[g], around_all[g]) << "node " << file.node_tag[g] << " on rank " << comm->getRank();
+  }
+  // Output numbering: a permutation of 0..N-1 across ranks, each rank's owned rows contiguous.
+  std::vector<long long> ids(339, 0), all_ids(339, 0);
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n) {
+    EXPECT_EQ(mesh.node_output_id[n], mesh.first_output_node + static_cast<long long>(n));
+    ids[mesh.node_output_id[n]] += 1;
+  }
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, 339, ids.data(), all_ids.data());
+  for (long long k : all_ids) EXPECT_EQ(k, 1);
+  if (comm->getSize() > 1) {
+    EXPECT_LT(mesh.n_owned_elements, 1125u) << "the elements were not spread over the ranks";
+    EXPECT_LT(mesh.local_nodes(), 339u) << "a rank kept the whole mesh";
+  }
+}
+
+TEST(MeshScenes, AffinePatchTestOnAGmshMeshIsExactForEveryModel) {
+  // Every boundary node moved by one affine map: the homogeneous deformation is the exact discrete
+  // solution for every hyperelastic model, so the interior nodes must follow it to the solver tolerance.
+  const std::string G = "{0.10, 0.05, 0.0, 0.0, -0.05, 0.02, 0.03, 0.0, 0.08}";
+  const double g[9] = {0.10, 0.05, 0.0, 0.0, -0.05, 0.02, 0.03, 0.0, 0.08};
+  const std::string bc = R"x(
+      <ParameterList name="surface">
+        <Parameter name="Region" type="string" value="group bottom, top, sides"/>
+        <Parameter name="Motion" type="string" value="affine"/>
+        <Parameter name="Gradient" type="Array(double)" value=")x" + G + R"x("/>
+        <Parameter name="Center" type="Array(double)" value="{0.5, 0.5, 0.5}"/>
+        <Parameter name="Displacement" type="Array(double)" value="{0.01, -0.02, 0.03}"/>
+      </ParameterList>)x";
+  const MeshFile file = read_mesh_file(mesh_path("box_v41.msh"));
+  double worst = 0.0;
+  for (const auto& model : material_model_names()) {
+    Simulation sim(config(box_scene("box_v41.msh", model, 0.3, bc), "test_results/patch" + tag()), RunOptions{true, ""});
+    ASSERT_EQ(sim.run(), 0) << model;
+    EXPECT_GT(sim.records().front().solve.newton_iterations, 0) << model;
+    const auto u = gather(sim.displacement());
+    ASSERT_EQ(u.size(), 3 * file.nodes());
+    double err = 0.0;
+    for (std::size_t n = 0; n < file.nodes(); ++n)
+      for (int i = 0; i < 3; ++i) {
+        const double d[3] = {0.01, -0.02, 0.03};
+        double expect = d[i];
+        for (int j = 0; j < 3; ++j) expect += g[3 * i + j] * (file.xyz[3 * n + j] - 0.5);
+        err = std::max(err, std::fabs(u[3 * n + i] - expect));
+      }
+    EXPECT_LT(err, 1e-8) << model;
+    worst = std::max(worst, err);
+  }
+  if (world()->getRank() == 0) std::printf("[ info ] affine patch test on box_v41.msh, every model: max |u - u_affine| = %.2e\n", worst);
+}
+
+TEST(MeshScenes, GmshTwistIsTheSameOnThreadsAndRanks) {
+  // A 1 rad twist of the Gmsh box. With 2 ranks, also solved by each rank alone; all variants compare
+  // with the 1-thread reference file CTest writes first.
+  const std::string bc = R"x(
+      <ParameterList name="bottom">
+        <Parameter name="Region" type="string" value="group bottom"/>
+      </ParameterList>
+      <ParameterList name="top">
+        <Parameter name="Region" type="string" value="group top"/>
+        <Parameter name="Motion" type="string" value="rotate"/>
+        <Parameter name="Center" type="Array(double)" value="{0.5, 0.5, 1}"/>
+        <Parameter name="Angle" type="double" value="1.0"/>
+      </ParameterList>)x";
+  const SceneConfig c = config(box_scene("box_v41_bin.msh", "stable-neohookean", 0.45, bc, "", 2, true), "test_results/gmsh_twist" + tag());
+  Simulation sim(c, RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const auto u = gather(sim.displacement());
+  EXPECT_GT(max_abs(u), 0.3);
+  if (world()->getSize() > 1) {
+    SceneConfig alone = c;
+    alone.params.output.directory += "_self" + std::to_string(world()->getRank());
+    Simulation self(alone, RunOptions{true, ""}, Teuchos::rcp(new Teuchos::MpiComm<int>(MPI_COMM_SELF)));
+    ASSERT_EQ(self.run(), 0);
+    const double d = rel_diff(gather(self.displacement()), u);
+    EXPECT_LT(d, 1e-8);
+    if (world()->getRank() == 0) std::printf("[ info ] 2 ranks vs 1 rank: max |du| / max |u| = %.2e\n", d);
+  }
+  const char* mode = std::getenv("SINEW_REFERENCE_MODE");
+  const char* file = std::getenv("SINEW_REFERENCE_FILE");
+  if (!mode || !file) return;
+  if (std::string(mode) == "write") {
+    if (world()->getRank() == 0) {
+      std::ofstream out(file);
+      out.precision(17);
+      for (double x : u) out << x << "\n";
+    }
+    return;
+  }
+  std::ifstream in(file);
+  ASSERT_TRUE(in.good()) << "reference " << file << " missing";
+  std::vector<double> ref;
+  for (double x; in >> x;) ref.push_back(x);
+  const double d = rel_diff(ref, u);
+  EXPECT_LT(d, 1e-8);
+  if (world()->getRank() == 0) std::printf("[ info ] against the 1-thread reference: max |du| / max |u| = %.2e\n", d);
+}
+
+namespace {
+
+Mat3 rotation_between(const Mat3& A, const Mat3& B) { return transpose(A) * B; }
+double rotation_angle(const Mat3& R) { return std::acos(std::clamp(0.5 * (R(0, 0) + R(1, 1) + R(2, 2) - 1.0), -1.0, 1.0)); }
+double distance(const Rigid& a, const Rigid& b) {
+  double d = std::sqrt(frobenius2(a.R - b.R));
+  for (int i = 0; i < 3; ++i) d = std::max(d, std::fabs(a.t[i] - b.t[i]));
+  return d;
+}
+std::size_t bone(const Skeleton& s, const std::string& name) {
+  for (std::size_t b = 0; b < s.size(); ++b)
+    if (s.name(b) == name) return b;
+  throw std::runtime_error("no bone " + name);
+}
+Rigid about(const std::array<double, 3>& axis, double angle, const std::array<double, 3>& pivot, const std::array<double, 3>& shift = {}) {
+  Rigid T;
+  T.R = axis_angle(axis, angle);
+  const auto Rp = T.apply(pivot);
+  for (int i = 0; i < 3; ++i) T.t[i] = pivot[i] - Rp[i] + shift[i];
+  return T;
+}
+
+const char* kTwoBones = R"x(
+  <ParameterList name="Skeleton">
+    <Parameter name="Skinning guess" type="bool" value="false"/>
+    <ParameterList name="Bones">
+      <ParameterList name="root">
+        <Parameter name="Region" type="string" value="group bottom"/>
+        <ParameterList name="Keyframes">
+          <ParameterList name="a">
+            <Parameter name="Time" type="double" value="0.5"/>
+            <Parameter name="Translation" type="Array(double)" value="{0, 0, 0.1}"/>
+          </ParameterList>
+          <ParameterList name="b">
+            <Parameter name="Time" type="double" value="1.0"/>
+            <Parameter name="Translation" type="Array(double)" value="{0, 0, 0.3}"/>
+          </ParameterList>
+        </ParameterList>
+      </ParameterList>
+      <ParameterList name="tip">
+        <Parameter name="Parent" type="string" value="root"/>
+        <Parameter name="Region" type="string" value="group top"/>
+        <Parameter name="Pivot" type="Array(double)" value="{0.5, 0.5, 1}"/>
+        <ParameterList name="Keyframes">
+          <ParameterList name="half">
+            <Parameter name="Time" type="double" value="0.5"/>
+            <Parameter name="Axis" type="Array(double)" value="{1, 0, 0}"/>
+            <Parameter name="Angle" type="double" value="0.4"/>
+          </ParameterList>
+          <ParameterList name="full">
+            <Parameter name="Time" type="double" value="1.0"/>
+            <Parameter name="Axis" type="Array(double)" value="{0, 1, 0}"/>
+            <Parameter name="Angle" type="double" value="0.6"/>
+          </ParameterList>
+        </ParameterList>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>)x";
+
+}  // namespace
+
+TEST(Skeleton, ChildrenMoveWithTheirParentsAndKeyframesInterpolate) {
+  Simulation sim(config(box_scene("box_v41.msh", "stable-neohookean", 0.3, "", kTwoBones, 4), "test_results/bones" + tag()),
+                 RunOptions{true, ""});
+  const Skeleton& s = sim.scene().skeleton();
+  ASSERT_EQ(s.size(), 2u);
+  const std::size_t root = bone(s, "root"), tip = bone(s, "tip");
+  // The root translates linearly between keyframes: 0.05 at t = 0.25, 0.2 at t = 0.75, held after 1.
+  EXPECT_LT(distance(s.transform(root, 0.25), about({0, 0, 1}, 0.0, {}, {0, 0, 0.05})), 1e-15);
+  EXPECT_LT(distance(s.transform(root, 0.75), about({0, 0, 1}, 0.0, {}, {0, 0, 0.2})), 1e-15);
+  EXPECT_LT(distance(s.transform(root, 1.0), about({0, 0, 1}, 0.0, {}, {0, 0, 0.3})), 1e-15);
+  EXPECT_LT(distance(s.transform(root, 0.0), Rigid{}), 1e-15);
+  // The tip: one axis from rest to the first keyframe (linear angle), composed after its parent.
+  const Rigid tip_quarter = s.transform(root, 0.25).after(about({1, 0, 0}, 0.2, {0.5, 0.5, 1}));
+  EXPECT_LT(distance(s.transform(tip, 0.25), tip_quarter), 1e-14);
+  // Between two keyframes with different axes: the geodesic (slerp) midpoint, equally far from both.
+  const Mat3 R1 = axis_angle({1, 0, 0}, 0.4), R2 = axis_angle({0, 1, 0}, 0.6);
+  const Mat3 Rm = s.transform(tip, 0.75).R;  // the root does not rotate
+  EXPECT_LT(std::sqrt(frobenius2(transpose(Rm) * Rm - Mat3::identity())), 1e-14);
+  EXPECT_NEAR(det(Rm), 1.0, 1e-14);
+  const double whole = rotation_angle(rotation_between(R1, R2));
+  EXPECT_NEAR(rotation_angle(rotation_between(R1, Rm)), 0.5 * whole, 1e-12);
+  EXPECT_NEAR(rotation_angle(rotation_between(Rm, R2)), 0.5 * whole, 1e-12);
+  // The pivot stays on the parent's path: the tip's pivot moves only by the root's translation.
+  const auto p = s.transform(tip, 0.75).apply({0.5, 0.5, 1});
+  EXPECT_NEAR(p[0], 0.5, 1e-14);
+  EXPECT_NEAR(p[1], 0.5, 1e-14);
+  EXPECT_NEAR(p[2], 1.2, 1e-14);
+
+  // The run: every bone node ends exactly where its bone puts it.
+  ASSERT_EQ(sim.run(), 0);
+  const auto u = gather(sim.displacement());
+  const MeshFile file = read_mesh_file(mesh_path("box_v41.msh"));
+  double err = 0.0;
+  for (const auto& [group, b] : std::vector<std::pair<std::string, std::size_t>>{{"bottom", root}, {"top", tip}})
+    for (int n : node_group(file, group)) {
+      const std::array<double, 3> X{file.xyz[3 * n], file.xyz[3 * n + 1], file.xyz[3 * n + 2]};
+      const auto x = s.transform(b, 1.0).apply(X);
+      for (int i = 0; i < 3; ++i) err = std::max(err, std::fabs(X[i] + u[3 * n + i] - x[i]));
+    }
+  EXPECT_LT(err, 1e-14);
+}
+
+TEST(Skeleton, AMotionFileIsInterpolatedBetweenItsFrames) {
+  // Three frames of world transforms; frame f is reached at load f / 2.
+  const Rigid f1 = about({0, 0, 1}, 0.3, {0.5, 0.5, 1}, {0.1, 0, 0}), f2 = about({0.6, 0.8, 0}, 0.5, {0.5, 0.5, 1}, {0.2, 0, 0.1});
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "frame,bone,r00,r01,r02,r10,r11,r12,r20,r21,r22,tx,ty,tz\n";
+  const Rigid frames[3] = {Rigid{}, f1, f2};
+  for (int f = 0; f < 3; ++f)
+    for (const std::string b : {"top", "bottom"}) {
+      const Rigid T = b == "top" ? frames[f] : Rigid{};
+      csv << f << "," << b;
+      for (int k = 0; k < 9; ++k) csv << "," << T.R(k / 3, k % 3);
+      for (int k = 0; k < 3; ++k) csv << "," << T.t[k];
+      csv << "\n";
+    }
+  const std::string path = std::filesystem::absolute(write_file("motion.csv", csv.str())).string();
+  const std::string skeleton = R"x(
+  <ParameterList name="Skeleton">
+    <Parameter name="Motion file" type="string" value=")x" + path + R"x("/>
+    <ParameterList name="Bones">
+      <ParameterList name="bottom"><Parameter name="Region" type="string" value="group bottom"/></ParameterList>
+      <ParameterList name="top"><Parameter name="Region" type="string" value="group top"/></ParameterList>
+    </ParameterList>
+  </ParameterList>)x";
+  Simulation sim(config(box_scene("box_v41.msh", "stable-neohookean", 0.3, "", skeleton, 4), "test_results/motion" + tag()),
+                 RunOptions{true, ""});
+  const Skeleton& s = sim.scene().skeleton();
+  const std::size_t top = bone(s, "top");
+  EXPECT_LT(distance(s.transform(top, 0.5), f1), 1e-14);
+  EXPECT_LT(distance(s.transform(top, 1.0), f2), 1e-14);
+  const Rigid m = s.transform(top, 0.75);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(m.t[i], 0.5 * (f1.t[i] + f2.t[i]), 1e-14);
+  const double whole = rotation_angle(rotation_between(f1.R, f2.R));
+  EXPECT_NEAR(rotation_angle(rotation_between(f1.R, m.R)), 0.5 * whole, 1e-12);
+  EXPECT_NEAR(rotation_angle(rotation_between(m.R, f2.R)), 0.5 * whole, 1e-12);
+  ASSERT_EQ(sim.run(), 0);
+}
