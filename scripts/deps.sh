@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Provision everything Sinew builds against, on Debian 12:
-#   1. Debian packages (Open MPI, parallel HDF5, BLAS/LAPACK, GoogleTest, Google Benchmark, tools);
+#   1. Debian packages (Open MPI, parallel HDF5, BLAS/LAPACK, GoogleTest, Google Benchmark, tools; gmsh to
+#      make meshes, meshio and ParaView's Python with Xvfb to read and render results);
 #   2. Trilinos 13.2 with Kokkos Serial + OpenMP, restored from a prebuilt archive found in a cache
 #      directory, or built from Debian's own source package when no archive is there.
 #
@@ -47,7 +48,8 @@ as_root() {
 packages=(build-essential cmake ninja-build ccache pkg-config xz-utils
   libopenmpi-dev openmpi-bin libhdf5-openmpi-dev hdf5-tools
   libblas-dev liblapack-dev libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-numpy python3-h5py python3-matplotlib)
+  python3 python3-numpy python3-h5py python3-matplotlib python3-pil
+  gmsh python3-meshio python3-paraview xvfb xauth)
 
 apt_install() {
   local missing=()

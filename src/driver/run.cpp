@@ -108,6 +108,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
       std::fflush(stdout);
     }
     auto progress = [&](const NewtonIterate& it) {
+      out_->log_newton(k, t, it);
       if (!talk_) return;
       std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations,
                   it.step, it.exact_hessian ? "  (exact Hessian)" : "");

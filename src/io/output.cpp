@@ -4,6 +4,8 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/io/output.hpp>
 
+#include "durable_file.hpp"
+
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Tpetra_Import.hpp>
@@ -22,6 +24,9 @@
 namespace sinew {
 
 namespace fs = std::filesystem;
+
+using io_detail::replace_durably;
+using io_detail::sync_path;
 
 namespace {
 
@@ -99,30 +104,29 @@ void write_attribute(hid_t file, const char* name, double value) {
   attr.close();
 }
 
+// Opens a CSV log for writing with its header; on restart it keeps the rows of the steps up to the
+// checkpoint (a row written after it belongs to a step that will be computed again).
+void open_csv(std::ofstream& out, const std::string& path, int restart_step, const std::string& header) {
+  std::vector<std::string> keep;
+  if (restart_step >= 0) {
+    std::ifstream old(path);
+    std::string line;
+    if (std::getline(old, line))
+      while (std::getline(old, line))
+        if (!line.empty() && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
+  }
+  out.open(path, std::ios::trunc);
+  if (!out) throw InputError("Output: cannot write " + path, InputErrorKind::File);
+  out << header << "\n";
+  for (const auto& l : keep) out << l << "\n";
+  out.flush();
+}
+
 // Creates an HDF5 file for collective parallel writing.
 hid_t create_parallel(const std::string& path, MPI_Comm comm) {
   H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
   H5Pset_fapl_mpio(fapl.id(), comm, MPI_INFO_NULL);
   return H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.id());
-}
-
-// fsync a file or folder by path.
-void sync_path(const std::string& path, bool directory) {
-  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
-  if (fd < 0) throw std::runtime_error("cannot open " + path + " to flush it to disk");
-  const int r = ::fsync(fd);
-  ::close(fd);
-  if (r != 0 && !directory) throw std::runtime_error("flushing " + path + " to disk failed");
-}
-
-// Puts a finished file in place durably: its data on disk first, then the rename, then the folder.
-void replace_durably(const std::string& tmp, const std::string& path) {
-  sync_path(tmp, false);
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
-  const fs::path dir = fs::path(path).parent_path();
-  sync_path(dir.empty() ? "." : dir.string(), true);
 }
 
 // Writes an HDF5 file aside with `fill` (collective), closes it checking the flush, and renames it into
@@ -158,21 +162,12 @@ Output::Output(const OutputParameters& params, const ElasticSystem& system, cons
         if (entry.path().extension() == ".tmp") fs::remove(entry.path(), ec);
       // On restart keep the rows of the steps up to the checkpoint (a row written after it belongs to
       // a step that will be computed again).
-      std::vector<std::string> keep;
-      if (restart_step >= 0) {
-        std::ifstream old(dir_ + "/log.csv");
-        std::string line;
-        if (std::getline(old, line))
-          while (std::getline(old, line))
-            if (!line.empty() && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
-      }
-      log_.open(dir_ + "/log.csv", std::ios::trunc);
-      if (!log_) throw InputError("Output: cannot create results folder '" + dir_ + "': cannot write log.csv", InputErrorKind::File);
-      log_ << "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
-              "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
-              "seconds_total\n";
-      for (const auto& l : keep) log_ << l << "\n";
-      log_.flush();
+      open_csv(log_, dir_ + "/log.csv", restart_step,
+               "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
+               "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
+               "seconds_total");
+      open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
+               "step,load,iteration,residual,cg_iterations,step_length,exact_hessian");
     });
   } catch (const std::runtime_error& e) {
     if (dynamic_cast<const InputError*>(&e)) throw;
@@ -220,7 +215,19 @@ void Output::write_mesh() {
   });
 }
 
+std::string Output::surface_file(int step) const {
+  std::ostringstream os;
+  os << dir_ << "/surface_" << std::setw(6) << std::setfill('0') << step << ".obj";
+  return os.str();
+}
+
 void Output::write_step(int step, double load, const Vector& u) {
+  if (params_.surface && (step % (params_.every * params_.surface_every) == 0 || step == steps_)) {
+    if (!surface_) surface_ = std::make_unique<BoundarySurface>(sys_.mesh(), *sys_.comm());
+    std::ostringstream what;
+    what << "step " << step << ", load " << load;
+    surface_->write_obj(surface_file(step), u, what.str());
+  }
   if (!params_.hdf5) return;
   const Mesh& m = sys_.mesh();
   MPI_Comm comm = raw_comm(*sys_.comm());
@@ -289,6 +296,13 @@ void Output::write_xdmf() const {
     if (!out) throw std::runtime_error("cannot write " + tmp);
   }
   replace_durably(tmp, path);
+}
+
+void Output::log_newton(int step, double load, const NewtonIterate& it) {
+  if (!root_) return;
+  newton_log_ << std::setprecision(10) << step << "," << load << "," << it.iteration << "," << it.residual << ","
+              << it.linear_iterations << "," << it.step << "," << (it.exact_hessian ? 1 : 0) << "\n";
+  newton_log_.flush();
 }
 
 void Output::log(const StepRecord& r) {

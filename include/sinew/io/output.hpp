@@ -7,15 +7,19 @@
 //   DIR/step_NNNNNN.h5     /position (x = X + u), /displacement, /J and /energy_density (per element),
 //                          attributes: load fraction, step
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
+//   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
 //   DIR/log.csv            one row per converged load step
+//   DIR/newton.csv         one row per Newton iteration (residual, CG iterations, step length)
 //   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
 #pragma once
 
 #include <sinew/algebra/elastic_system.hpp>
 #include <sinew/core/range.hpp>
+#include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
 
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -24,8 +28,8 @@ namespace sinew {
 // The "Output" section of a scene.
 struct OutputParameters {
   std::string directory;
-  int every = 0, checkpoint_every = 0;
-  bool hdf5 = true;
+  int every = 0, checkpoint_every = 0, surface_every = 0;
+  bool hdf5 = true, surface = true;
 
   template <class V>
   void visit(V& v) {
@@ -33,6 +37,10 @@ struct OutputParameters {
     v.entry("Every", every, 1, "write fields every this many steps (the last step is always written)",
             Range::at_least(1));
     v.entry("HDF5", hdf5, true, "write HDF5/XDMF fields (the CSV log is always written)");
+    v.entry("Surface OBJ", surface, true,
+            "write the deformed boundary surface with normals as DIR/surface_NNNNNN.obj (for Blender, Houdini, Maya)");
+    v.entry("Surface every", surface_every, 1,
+            "write the surface at every this-many-th field output (the first and last step always)", Range::at_least(1));
     v.entry("Checkpoint every", checkpoint_every, 1,
             "write DIR/checkpoint.h5 every this many steps (0: never); sinew --restart continues from it",
             Range::non_negative());
@@ -72,10 +80,14 @@ class Output {
   int every() const { return params_.every; }
 
   void write_mesh();
-  // Collective: one step file and the XDMF index.
+  // Collective: one step file and the XDMF index, and the surface when its turn has come.
   void write_step(int step, double load, const Vector& u);
+  // Path of the surface OBJ of a step.
+  std::string surface_file(int step) const;
   // Rank 0 appends a row to log.csv.
   void log(const StepRecord& r);
+  // Rank 0 appends a row to newton.csv (`load`: the load fraction being solved for).
+  void log_newton(int step, double load, const NewtonIterate& it);
   // Path of the HDF5 file of a written step.
   std::string step_file(int step) const;
 
@@ -97,7 +109,8 @@ class Output {
   int steps_ = 1;
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
-  std::ofstream log_;
+  std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
+  std::ofstream log_, newton_log_;
 };
 
 }  // namespace sinew

@@ -1,0 +1,43 @@
+// The boundary surface of the mesh as triangles, for renderers (Blender, Houdini, Maya read OBJ):
+// faces that belong to exactly one element, oriented outward (counter-clockwise seen from outside),
+// hex8 quads split in two along their 0-2 diagonal; per-vertex normals area-weighted in the current
+// configuration.
+//
+// Distributed without communicating the volume mesh: a face is counted by the rank that owns its
+// lowest-numbered node, which holds every element around that node (the ghost layer), so it sees every
+// element sharing the face. Each rank also knows which of its owned nodes lie on the surface. Rank 0
+// gathers the surface (triangles once, vertex positions per write) and writes the file; its size grows
+// with the surface, not the volume.
+#pragma once
+
+#include <sinew/algebra/elastic_system.hpp>
+
+#include <string>
+#include <vector>
+
+namespace sinew {
+
+class BoundarySurface {
+ public:
+  // Collective.
+  BoundarySurface(const Mesh& mesh, const Teuchos::Comm<int>& comm);
+
+  // Global counts (valid on every rank).
+  long long triangles() const { return n_triangles_; }
+  long long vertices() const { return n_vertices_; }
+
+  // Collective: writes the deformed surface x = X + u (u on the owned nodes) as a Wavefront OBJ with
+  // normals, aside and then renamed into place by rank 0; a failure is an error on every rank.
+  void write_obj(const std::string& path, const Vector& u, const std::string& comment) const;
+
+ private:
+  const Mesh& mesh_;
+  MPI_Comm comm_;
+  bool root_ = false;
+  std::vector<int> owned_vertices_;             // local owned nodes on the surface
+  std::vector<int> counts_, offsets_;           // rank 0: vertices per rank
+  std::vector<std::array<int, 3>> triangles_;   // rank 0: vertex indices in gathered order
+  long long n_triangles_ = 0, n_vertices_ = 0;
+};
+
+}  // namespace sinew

@@ -1,0 +1,238 @@
+"""Renders Sinew results to PNG with ParaView's own Python (run through scripts/sinew-render).
+
+The results folder's XDMF index is opened with ParaView's reader, exactly as a user opening it in
+ParaView would; each chosen step is shown deformed, coloured by a cell field (J by default) with a
+colour bar, under one fixed camera that frames every step of the run. Several steps form a strip, side
+by side in one picture, each labelled with its step and load.
+"""
+import argparse
+import glob
+import os
+import sys
+import xml.etree.ElementTree as ET
+
+import h5py
+import numpy as np
+
+
+def fail(msg):
+    print("sinew-render: " + msg, file=sys.stderr)
+    sys.exit(2)
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="sinew-render", description=__doc__.split("\n\n")[0])
+    p.add_argument("results", help="a results folder of sinew (holds NAME.xdmf, mesh.h5, step_*.h5)")
+    p.add_argument("--steps", default="last",
+                   help="which steps: 'last' (default), 'first', 'all', a comma list of step numbers, "
+                        "or 'strip:N' for N steps evenly spread from the first to the last")
+    p.add_argument("--field", default="J", choices=["J", "energy_density", "displacement"],
+                   help="colour by this field (default J = det F: volume change)")
+    p.add_argument("--range", default=None, help="colour range 'lo,hi' (default: over the shown steps)")
+    p.add_argument("--size", default="1200x900", help="picture size WxH in pixels (default 1200x900)")
+    p.add_argument("--view", default="iso", choices=["iso", "x", "y", "z", "-x", "-y", "-z"],
+                   help="camera direction: iso (default) or looking along an axis")
+    p.add_argument("--rest", action="store_true", help="also draw the rest shape as a faint wireframe")
+    p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
+    p.add_argument("--title", default=None, help="a title above the picture")
+    p.add_argument("-o", "--output", default=None,
+                   help="PNG file (default RESULTS/render_stepNNNNNN.png, or render_strip.png for several steps)")
+    return p.parse_args(argv)
+
+
+def written_steps(results):
+    """(step, load, h5 file) of every step the XDMF index lists, in order."""
+    xdmf = sorted(glob.glob(os.path.join(results, "*.xdmf")))
+    if not xdmf:
+        fail(f"no .xdmf index in '{results}' (was the run's HDF5 output turned off?)")
+    if len(xdmf) > 1:
+        fail(f"several .xdmf files in '{results}': " + ", ".join(os.path.basename(x) for x in xdmf))
+    try:
+        root = ET.parse(xdmf[0]).getroot()
+    except ET.ParseError as e:
+        fail(f"{xdmf[0]}: not readable XDMF ({e})")
+    steps = []
+    for grid in root.iter("Grid"):
+        if grid.get("GridType") != "Uniform":
+            continue
+        load = float(grid.find("Time").get("Value"))
+        step = int(grid.get("Name").split()[-1])
+        item = grid.find("Geometry/DataItem").text.strip()
+        steps.append((step, load, os.path.join(results, item.split(":")[0])))
+    if not steps:
+        fail(f"{xdmf[0]} lists no steps")
+    return xdmf[0], steps
+
+
+def choose(steps, spec):
+    if spec == "last":
+        return [steps[-1]]
+    if spec == "first":
+        return [steps[0]]
+    if spec == "all":
+        return steps
+    if spec.startswith("strip:"):
+        try:
+            n = int(spec[6:])
+        except ValueError:
+            fail(f"--steps {spec}: N must be a whole number")
+        if n < 1:
+            fail("--steps strip:N needs N >= 1")
+        idx = sorted(set(int(round(i)) for i in np.linspace(0, len(steps) - 1, min(n, len(steps)))))
+        return [steps[i] for i in idx]
+    by_number = {s[0]: s for s in steps}
+    chosen = []
+    for item in spec.split(","):
+        try:
+            k = int(item)
+        except ValueError:
+            fail(f"--steps: '{item}' is not a step number (or last, first, all, strip:N)")
+        if k not in by_number:
+            fail(f"--steps: step {k} was not written; written steps: " + ", ".join(str(s) for s in by_number))
+        chosen.append(by_number[k])
+    return chosen
+
+
+def bounds_of_run(steps):
+    """Bounding box of the deformed shape over every written step (the fixed camera frames it)."""
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for _, _, f in steps:
+        with h5py.File(f, "r") as h:
+            x = h["/position"][...]
+        lo, hi = np.minimum(lo, x.min(axis=0)), np.maximum(hi, x.max(axis=0))
+    return lo, hi
+
+
+def field_range(chosen, field):
+    lo, hi = np.inf, -np.inf
+    for _, _, f in chosen:
+        with h5py.File(f, "r") as h:
+            v = h["/" + field][...]
+        if v.ndim == 2:
+            v = np.linalg.norm(v, axis=1)
+        lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
+    if field == "J":  # centre on 1 (no volume change) so that loss and gain read alike
+        d = max(abs(lo - 1.0), abs(hi - 1.0), 1e-3)
+        return 1.0 - d, 1.0 + d
+    return (lo, hi) if hi > lo else (lo - 1e-12, hi + 1e-12)
+
+
+def main(argv):
+    a = parse_args(argv)
+    if not os.path.isdir(a.results):
+        fail(f"'{a.results}' is not a folder")
+    try:
+        w, h = (int(v) for v in a.size.lower().split("x"))
+        assert 16 <= w <= 8192 and 16 <= h <= 8192
+    except (ValueError, AssertionError):
+        fail(f"--size '{a.size}' must be WxH with each side from 16 to 8192")
+    xdmf, steps = written_steps(a.results)
+    chosen = choose(steps, a.steps)
+    lo, hi = bounds_of_run(steps)
+    if a.range:
+        try:
+            crange = tuple(float(v) for v in a.range.split(","))
+            assert len(crange) == 2 and crange[0] < crange[1]
+        except (ValueError, AssertionError):
+            fail(f"--range '{a.range}' must be 'lo,hi' with lo < hi")
+    else:
+        crange = field_range(chosen, a.field)
+
+    from paraview import simple as pv  # after the argument checks: importing ParaView takes seconds
+
+    reader = pv.OpenDataFile(xdmf)
+    if reader is None:
+        fail(f"ParaView cannot open {xdmf}")
+    view = pv.CreateView("RenderView")
+    view.ViewSize = [w, h]
+    view.Background = [1, 1, 1]
+    try:
+        view.UseColorPaletteForBackground = 0
+    except AttributeError:
+        pass
+    view.OrientationAxesVisibility = 0
+    extent = hi - lo
+    gap = 0.25 * max(extent[0], 1e-12)
+    lut = pv.GetColorTransferFunction(a.field)
+    lut.ApplyPreset("Cool to Warm", True)
+    lut.RescaleTransferFunction(*crange)
+    lut.AutomaticRescaleRangeMode = "Never"
+    if a.field == "displacement":
+        lut.VectorMode = "Magnitude"
+    n = len(chosen)
+    for i, (step, load, _) in enumerate(chosen):
+        at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)
+        shift = [i * (extent[0] + gap), 0.0, 0.0]
+        moved = pv.Transform(Input=at)
+        moved.Transform.Translate = shift
+        surface = pv.ExtractSurface(Input=moved)
+        d = pv.Show(surface, view)
+        d.Representation = "Surface With Edges" if a.edges else "Surface"
+        if a.edges:
+            d.EdgeColor = [0.2, 0.2, 0.2]
+        pv.ColorBy(d, ("CELLS" if a.field != "displacement" else "POINTS", a.field))
+        d.LookupTable = lut
+        if a.rest:
+            rest = pv.Transform(Input=pv.ForceTime(Input=reader, ForcedTime=0.0, IgnorePipelineTime=1))
+            rest.Transform.Translate = shift
+            r = pv.Show(pv.ExtractSurface(Input=rest), view)
+            r.Representation = "Wireframe"
+            r.AmbientColor = r.DiffuseColor = [0.45, 0.45, 0.45]
+            r.Opacity = 0.25
+            r.ColorArrayName = [None, ""]
+        if n > 1:  # a label under each shape, in the scene (so it stays with its shape under any camera)
+            label = pv.Transform(Input=pv.a3DText(Text=f"step {step}, load {load:.3g}"))
+            size = 0.08 * max(extent)
+            label.Transform.Scale = [size, size, size]
+            label.Transform.Rotate = [90.0, 0.0, 0.0]  # upright, facing -y like the default camera
+            label.Transform.Translate = [lo[0] + shift[0], lo[1], lo[2] - 2.0 * size]
+            t = pv.Show(label, view)
+            t.AmbientColor = t.DiffuseColor = [0.1, 0.1, 0.1]
+            t.ColorArrayName = [None, ""]
+    bar = pv.GetScalarBar(lut, view)
+    bar.Title = {"J": "J = det F", "energy_density": "energy density", "displacement": "|u|"}[a.field]
+    bar.ComponentTitle = ""
+    bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
+    bar.Visibility = 1
+    bar.WindowLocation = "Any Location"
+    bar.Position = [0.85, 0.2]
+    bar.ScalarBarLength = 0.6
+    bar.RangeLabelFormat = "%-#.4g"
+    bar.LabelFormat = "%-#.4g"
+    # Showing and colouring rescale the map to the data: fix it last, the same for every step.
+    lut.AutomaticRescaleRangeMode = "Never"
+    lut.RescaleTransferFunction(*crange)
+    if a.title or n == 1:
+        step, load, _ = chosen[0]
+        text = a.title or f"{os.path.basename(os.path.abspath(a.results))}: step {step}, load {load:.3g}"
+        tt = pv.Show(pv.Text(Text=text), view)
+        tt.WindowLocation = "Upper Center"
+        tt.FontSize = 16
+        tt.Color = [0.1, 0.1, 0.1]
+
+    # One fixed camera for the whole run: it frames the union of every step's shape (and the strip).
+    if n > 1:
+        lo[2] -= 0.2 * max(extent)  # room for the labels
+    box_lo = lo.copy()
+    box_hi = hi.copy()
+    box_hi[0] += (n - 1) * (extent[0] + gap)
+    centre = 0.5 * (box_lo + box_hi)
+    radius = 0.5 * float(np.linalg.norm(box_hi - box_lo))
+    direction = {"iso": (1.0, -1.6, 0.9), "x": (1, 0, 0), "-x": (-1, 0, 0), "y": (0, 1, 0), "-y": (0, -1, 0),
+                 "z": (0, 0, 1), "-z": (0, 0, -1)}[a.view]
+    direction = np.array(direction, dtype=float) / np.linalg.norm(direction)
+    view.CameraFocalPoint = list(centre)
+    view.CameraPosition = list(centre + direction * radius * 4.0)
+    view.CameraViewUp = [0, 1, 0] if a.view in ("z", "-z") else [0, 0, 1]
+    view.CameraParallelProjection = 1
+    view.CameraParallelScale = radius * 1.05
+    if n > 1:
+        view.ResetCamera(False)
+    out = a.output or os.path.join(
+        a.results, f"render_step{chosen[0][0]:06d}.png" if n == 1 else "render_strip.png")
+    pv.SaveScreenshot(out, view, ImageResolution=[w, h], TransparentBackground=0)
+    print(out)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,157 @@
+// Boundary surface extraction and OBJ writing (surface.hpp).
+#include <sinew/core/collective.hpp>
+#include <sinew/io/surface.hpp>
+
+#include "durable_file.hpp"
+
+#include <Tpetra_Vector.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <unordered_map>
+
+namespace sinew {
+
+namespace {
+
+// Outward faces of a positively oriented element in Gmsh/VTK node order (counter-clockwise seen from
+// outside). tet4: the faces opposite nodes 3, 2, 1, 0; hex8: bottom 0-1-2-3, top 4-7.
+constexpr int kTetFaces[4][4] = {{0, 2, 1, -1}, {0, 1, 3, -1}, {0, 3, 2, -1}, {1, 2, 3, -1}};
+constexpr int kHexFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+
+struct Face {
+  std::array<GlobalId, 4> key;  // sorted global node ids (-1 pad for triangles)
+  int element, face;
+};
+
+}  // namespace
+
+BoundarySurface::BoundarySurface(const Mesh& mesh, const Teuchos::Comm<int>& comm)
+    : mesh_(mesh), comm_(raw_comm(comm)), root_(comm.getRank() == 0) {
+  const bool hex = mesh.type == ElementType::Hex8;
+  const int nf = hex ? 6 : 4, nv = hex ? 4 : 3;
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  const auto owned = [&](int local) { return static_cast<std::size_t>(local) < mesh.n_owned_nodes; };
+  const auto corner = [&](int e, int f, int a) { return hex ? conn(e, kHexFaces[f][a]) : conn(e, kTetFaces[f][a]); };
+
+  // Faces touching an owned node: every element sharing such a face is on this rank.
+  std::vector<Face> faces;
+  for (int e = 0; e < static_cast<int>(mesh.local_elements()); ++e)
+    for (int f = 0; f < nf; ++f) {
+      bool touches = false;
+      Face face{{-1, -1, -1, -1}, e, f};
+      for (int a = 0; a < nv; ++a) {
+        touches |= owned(corner(e, f, a));
+        face.key[a] = mesh.node_gid[corner(e, f, a)];
+      }
+      if (!touches) continue;
+      std::sort(face.key.begin(), face.key.begin() + nv);
+      faces.push_back(face);
+    }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+
+  std::vector<char> on_surface(mesh.local_nodes(), 0);
+  std::vector<GlobalId> tri_gids;  // faces this rank counts: 3 global ids per triangle
+  std::unordered_map<GlobalId, int> local_of;
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) local_of[mesh.node_gid[n]] = static_cast<int>(n);
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i == 1) {  // on one element only: the boundary
+      const Face& F = faces[i];
+      for (int a = 0; a < nv; ++a) on_surface[corner(F.element, F.face, a)] = 1;
+      if (owned(local_of.at(F.key[0]))) {  // the owner of the lowest node writes it
+        GlobalId g[4];
+        for (int a = 0; a < nv; ++a) g[a] = mesh.node_gid[corner(F.element, F.face, a)];
+        tri_gids.insert(tri_gids.end(), {g[0], g[1], g[2]});
+        if (hex) tri_gids.insert(tri_gids.end(), {g[0], g[2], g[3]});
+      }
+    }
+    i = j;
+  }
+  std::vector<GlobalId> vertex_gids;
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+    if (on_surface[n]) {
+      owned_vertices_.push_back(static_cast<int>(n));
+      vertex_gids.push_back(mesh.node_gid[n]);
+    }
+
+  // Rank 0 gathers the topology once.
+  int P = 1;
+  MPI_Comm_size(comm_, &P);
+  auto gather = [&](const std::vector<GlobalId>& mine, std::vector<int>& counts, std::vector<int>& offsets) {
+    int n = static_cast<int>(mine.size());
+    counts.assign(P, 0);
+    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
+    offsets.assign(P + 1, 0);
+    for (int r = 0; r < P; ++r) offsets[r + 1] = offsets[r] + counts[r];
+    std::vector<GlobalId> all(root_ ? offsets[P] : 0);
+    MPI_Gatherv(mine.data(), n, MPI_LONG_LONG, all.data(), counts.data(), offsets.data(), MPI_LONG_LONG, 0, comm_);
+    return all;
+  };
+  static_assert(sizeof(GlobalId) == sizeof(long long), "global ids travel as MPI_LONG_LONG");
+  std::vector<int> tcounts, toffsets;
+  const std::vector<GlobalId> all_vertices = gather(vertex_gids, counts_, offsets_);
+  const std::vector<GlobalId> all_tris = gather(tri_gids, tcounts, toffsets);
+  long long n[2] = {static_cast<long long>(all_vertices.size()), static_cast<long long>(all_tris.size() / 3)};
+  MPI_Bcast(n, 2, MPI_LONG_LONG, 0, comm_);
+  n_vertices_ = n[0];
+  n_triangles_ = n[1];
+  if (!root_) return;
+  std::unordered_map<GlobalId, int> index;
+  for (std::size_t k = 0; k < all_vertices.size(); ++k) index[all_vertices[k]] = static_cast<int>(k);
+  triangles_.resize(all_tris.size() / 3);
+  for (std::size_t t = 0; t < triangles_.size(); ++t)
+    for (int a = 0; a < 3; ++a) triangles_[t][a] = index.at(all_tris[3 * t + a]);
+}
+
+void BoundarySurface::write_obj(const std::string& path, const Vector& u, const std::string& comment) const {
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
+  auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+  std::vector<double> mine(3 * owned_vertices_.size());
+  for (std::size_t k = 0; k < owned_vertices_.size(); ++k)
+    for (int d = 0; d < 3; ++d) mine[3 * k + d] = X(owned_vertices_[k], d) + uv(3 * owned_vertices_[k] + d, 0);
+  int P = 1;
+  MPI_Comm_size(comm_, &P);
+  std::vector<int> counts(P), offsets(P);
+  for (int r = 0; root_ && r < P; ++r) {
+    counts[r] = 3 * counts_[r];
+    offsets[r] = 3 * offsets_[r];
+  }
+  std::vector<double> x(root_ ? 3 * n_vertices_ : 0);
+  MPI_Gatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, x.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_);
+  collectively(comm_, [&] {
+    if (!root_) return;
+    // Area-weighted vertex normals: the sum of the (unnormalized) cross products of the triangles around.
+    std::vector<double> normal(x.size(), 0.0);
+    for (const auto& t : triangles_) {
+      const double* p0 = &x[3 * t[0]];
+      const double* p1 = &x[3 * t[1]];
+      const double* p2 = &x[3 * t[2]];
+      const double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+      const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+      for (int v : t)
+        for (int d = 0; d < 3; ++d) normal[3 * v + d] += c[d];
+    }
+    const std::string tmp = path + ".tmp";
+    std::FILE* f = std::fopen(tmp.c_str(), "w");
+    if (!f) throw std::runtime_error("cannot write " + tmp);
+    std::fprintf(f, "# Sinew boundary surface: %lld vertices, %lld triangles; %s\n", n_vertices_, n_triangles_, comment.c_str());
+    for (std::size_t v = 0; v < x.size() / 3; ++v) std::fprintf(f, "v %.10g %.10g %.10g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+    for (std::size_t v = 0; v < x.size() / 3; ++v) {
+      const double* m = &normal[3 * v];
+      const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+      const double s = len > 0.0 ? 1.0 / len : 0.0;
+      std::fprintf(f, "vn %.6f %.6f %.6f\n", s * m[0], s * m[1], s * m[2]);
+    }
+    for (const auto& t : triangles_)
+      std::fprintf(f, "f %d//%d %d//%d %d//%d\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1);
+    const bool ok = std::ferror(f) == 0;
+    if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
+    io_detail::replace_durably(tmp, path);
+  });
+}
+
+}  // namespace sinew
