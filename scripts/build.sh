@@ -13,9 +13,11 @@ build_type=Release
 trilinos_dir=
 deps_args=()
 cmake_extra=()
+cmake_cache=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --deps-cache) deps_args+=(--deps-cache "${2:?--deps-cache needs a directory}"); shift 2 ;;
+    --deps-cache) deps_args+=(--deps-cache "${2:?--deps-cache needs a directory}")
+                  cmake_cache=(-DSINEW_DEPS_CACHE="$(cd "$2" && pwd)"); shift 2 ;;
     --no-apt) deps_args+=(--no-apt); shift ;;
     --build-dir) build_dir=${2:?}; shift 2 ;;
     --build-type) build_type=${2:?}; shift 2 ;;
@@ -34,7 +36,7 @@ command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=cca
 t0=$SECONDS
 mkdir -p "$build_dir"
 cmake -S "$repo" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" \
-  -DTrilinos_DIR="$trilinos_dir" "${launcher[@]}" "${cmake_extra[@]}" >"$build_dir/configure.log" 2>&1 \
+  -DTrilinos_DIR="$trilinos_dir" "${launcher[@]}" "${cmake_cache[@]}" "${cmake_extra[@]}" >"$build_dir/configure.log" 2>&1 \
   || { cat "$build_dir/configure.log" >&2; exit 1; }
 cmake --build "$build_dir" -j "$jobs"
 echo "[build] $build_dir ready ($(( SECONDS - t0 )) s)" >&2

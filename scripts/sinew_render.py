@@ -22,7 +22,10 @@ def fail(msg):
 
 def parse_args(argv):
     p = argparse.ArgumentParser(prog="sinew-render", description=__doc__.split("\n\n")[0])
-    p.add_argument("results", help="a results folder of sinew (holds NAME.xdmf, mesh.h5, step_*.h5)")
+    p.add_argument("results", nargs="+",
+                   help="a results folder of sinew (holds NAME.xdmf, mesh.h5, step_*.h5); several folders are "
+                        "shown side by side at the same step choice (a comparison of models, like the paper's Fig. 5)")
+    p.add_argument("--labels", default=None, help="comma list of labels for several folders (default: folder names)")
     p.add_argument("--steps", default="last",
                    help="which steps: 'last' (default), 'first', 'all', a comma list of step numbers, "
                         "or 'strip:N' for N steps evenly spread from the first to the last")
@@ -119,16 +122,28 @@ def field_range(chosen, field):
 
 def main(argv):
     a = parse_args(argv)
-    if not os.path.isdir(a.results):
-        fail(f"'{a.results}' is not a folder")
+    for r in a.results:
+        if not os.path.isdir(r):
+            fail(f"'{r}' is not a folder")
     try:
         w, h = (int(v) for v in a.size.lower().split("x"))
         assert 16 <= w <= 8192 and 16 <= h <= 8192
     except (ValueError, AssertionError):
         fail(f"--size '{a.size}' must be WxH with each side from 16 to 8192")
-    xdmf, steps = written_steps(a.results)
-    chosen = choose(steps, a.steps)
-    lo, hi = bounds_of_run(steps)
+    labels = a.labels.split(",") if a.labels else [os.path.basename(os.path.abspath(r)) for r in a.results]
+    if len(labels) != len(a.results):
+        fail(f"--labels gives {len(labels)} labels for {len(a.results)} folders")
+    # Panels: (xdmf, step, load, label), left to right.
+    panels, all_steps = [], []
+    for r, name in zip(a.results, labels):
+        xdmf, steps = written_steps(r)
+        chosen = choose(steps, a.steps)
+        if len(a.results) > 1 and len(chosen) > 1:
+            fail("with several folders --steps must pick one step (last, first or a number)")
+        panels += [(xdmf, st, ld, name if len(a.results) > 1 else f"step {st}, load {ld:.3g}") for st, ld, _ in chosen]
+        all_steps += steps
+    chosen = [(st, ld, None) for _, st, ld, _ in panels]
+    lo, hi = bounds_of_run(all_steps)
     if a.range:
         try:
             crange = tuple(float(v) for v in a.range.split(","))
@@ -136,13 +151,18 @@ def main(argv):
         except (ValueError, AssertionError):
             fail(f"--range '{a.range}' must be 'lo,hi' with lo < hi")
     else:
-        crange = field_range(chosen, a.field)
+        picked = [s for s in all_steps if any(s[0] == st and os.path.dirname(s[2]) == os.path.dirname(x)
+                                              for x, st, _, _ in panels)]
+        crange = field_range(picked, a.field)
 
     from paraview import simple as pv  # after the argument checks: importing ParaView takes seconds
 
-    reader = pv.OpenDataFile(xdmf)
-    if reader is None:
-        fail(f"ParaView cannot open {xdmf}")
+    readers = {}
+    for xdmf, _, _, _ in panels:
+        if xdmf not in readers:
+            readers[xdmf] = pv.OpenDataFile(xdmf)
+            if readers[xdmf] is None:
+                fail(f"ParaView cannot open {xdmf}")
     view = pv.CreateView("RenderView")
     view.ViewSize = [w, h]
     view.Background = [1, 1, 1]
@@ -152,15 +172,16 @@ def main(argv):
         pass
     view.OrientationAxesVisibility = 0
     extent = hi - lo
-    gap = 0.25 * max(extent[0], 1e-12)
+    gap = (0.6 if len(a.results) > 1 else 0.25) * max(extent[0], 1e-12)
     lut = pv.GetColorTransferFunction(a.field)
     lut.ApplyPreset("Cool to Warm", True)
     lut.RescaleTransferFunction(*crange)
     lut.AutomaticRescaleRangeMode = "Never"
     if a.field == "displacement":
         lut.VectorMode = "Magnitude"
-    n = len(chosen)
-    for i, (step, load, _) in enumerate(chosen):
+    n = len(panels)
+    for i, (xdmf, step, load, name) in enumerate(panels):
+        reader = readers[xdmf]
         at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)
         shift = [i * (extent[0] + gap), 0.0, 0.0]
         moved = pv.Transform(Input=at)
@@ -181,8 +202,9 @@ def main(argv):
             r.Opacity = 0.25
             r.ColorArrayName = [None, ""]
         if n > 1:  # a label under each shape, in the scene (so it stays with its shape under any camera)
-            label = pv.Transform(Input=pv.a3DText(Text=f"step {step}, load {load:.3g}"))
-            size = 0.08 * max(extent)
+            label = pv.Transform(Input=pv.a3DText(Text=name))
+            # a3DText letters are about 0.75 wide per unit of scale: fit the label under its panel.
+            size = min(0.08 * max(extent), 0.9 * (extent[0] + gap) / (0.75 * max(len(name), 1)))
             label.Transform.Scale = [size, size, size]
             label.Transform.Rotate = [90.0, 0.0, 0.0]  # upright, facing -y like the default camera
             label.Transform.Translate = [lo[0] + shift[0], lo[1], lo[2] - 2.0 * size]
@@ -204,7 +226,7 @@ def main(argv):
     lut.RescaleTransferFunction(*crange)
     if a.title or n == 1:
         step, load, _ = chosen[0]
-        text = a.title or f"{os.path.basename(os.path.abspath(a.results))}: step {step}, load {load:.3g}"
+        text = a.title or f"{labels[0]}: step {step}, load {load:.3g}"
         tt = pv.Show(pv.Text(Text=text), view)
         tt.WindowLocation = "Upper Center"
         tt.FontSize = 16
@@ -225,11 +247,22 @@ def main(argv):
     view.CameraPosition = list(centre + direction * radius * 4.0)
     view.CameraViewUp = [0, 1, 0] if a.view in ("z", "-z") else [0, 0, 1]
     view.CameraParallelProjection = 1
-    view.CameraParallelScale = radius * 1.05
-    if n > 1:
-        view.ResetCamera(False)
+    # Fit the box of the run (and the strip) as the camera sees it: project its corners on the screen
+    # axes; the colour bar keeps the right 18% of the picture.
+    up = np.array(view.CameraViewUp, dtype=float)
+    right = np.cross(up, direction)
+    right /= np.linalg.norm(right)
+    up = np.cross(direction, right)
+    corners = np.array([[x, y, z] for x in (box_lo[0], box_hi[0]) for y in (box_lo[1], box_hi[1])
+                        for z in (box_lo[2], box_hi[2])])
+    width, height = np.ptp(corners @ right), np.ptp(corners @ up)
+    view.CameraParallelScale = 0.5 * 1.1 * max(height + (0.12 * height if a.title or n == 1 else 0.0),
+                                               width / (0.82 * w / h), 1e-12)
+    view.CameraFocalPoint = list(centre + right * 0.09 * width / 0.82)
+    view.CameraPosition = list(np.array(view.CameraFocalPoint) + direction * radius * 4.0)
     out = a.output or os.path.join(
-        a.results, f"render_step{chosen[0][0]:06d}.png" if n == 1 else "render_strip.png")
+        a.results[0], f"render_step{chosen[0][0]:06d}.png" if n == 1 else
+        "render_strip.png" if len(a.results) == 1 else "render_comparison.png")
     pv.SaveScreenshot(out, view, ImageResolution=[w, h], TransparentBackground=0)
     print(out)
 
