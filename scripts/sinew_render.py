@@ -37,6 +37,8 @@ def parse_args(argv):
                    help="camera direction: iso (default) or looking along an axis")
     p.add_argument("--rest", action="store_true", help="also draw the rest shape as a faint wireframe")
     p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
+    p.add_argument("--skin", action="store_true",
+                   help="draw the skin a voxelized mesh carries (skin_NNNNNN.obj) in flesh colour instead of the mesh")
     p.add_argument("--title", default=None, help="a title above the picture")
     p.add_argument("-o", "--output", default=None,
                    help="PNG file (default RESULTS/render_stepNNNNNN.png, or render_strip.png for several steps)")
@@ -182,17 +184,28 @@ def main(argv):
     n = len(panels)
     for i, (xdmf, step, load, name) in enumerate(panels):
         reader = readers[xdmf]
-        at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)
         shift = [i * (extent[0] + gap), 0.0, 0.0]
-        moved = pv.Transform(Input=at)
-        moved.Transform.Translate = shift
-        surface = pv.ExtractSurface(Input=moved)
-        d = pv.Show(surface, view)
-        d.Representation = "Surface With Edges" if a.edges else "Surface"
-        if a.edges:
-            d.EdgeColor = [0.2, 0.2, 0.2]
-        pv.ColorBy(d, ("CELLS" if a.field != "displacement" else "POINTS", a.field))
-        d.LookupTable = lut
+        if a.skin:  # the carried input surface of this step, as a renderer would show it
+            obj = os.path.join(os.path.dirname(xdmf), f"skin_{step:06d}.obj")
+            if not os.path.exists(obj):
+                fail(f"no {obj}: --skin needs a voxelized run (Mesh/Type voxelize) with 'Surface OBJ' on")
+            moved = pv.Transform(Input=pv.OpenDataFile(obj))
+            moved.Transform.Translate = shift
+            d = pv.Show(moved, view)
+            d.ColorArrayName = [None, ""]
+            d.AmbientColor = d.DiffuseColor = [0.87, 0.66, 0.56]
+            d.Specular = 0.15
+        else:
+            at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)
+            moved = pv.Transform(Input=at)
+            moved.Transform.Translate = shift
+            surface = pv.ExtractSurface(Input=moved)
+            d = pv.Show(surface, view)
+            d.Representation = "Surface With Edges" if a.edges else "Surface"
+            if a.edges:
+                d.EdgeColor = [0.2, 0.2, 0.2]
+            pv.ColorBy(d, ("CELLS" if a.field != "displacement" else "POINTS", a.field))
+            d.LookupTable = lut
         if a.rest:
             rest = pv.Transform(Input=pv.ForceTime(Input=reader, ForcedTime=0.0, IgnorePipelineTime=1))
             rest.Transform.Translate = shift
@@ -215,7 +228,7 @@ def main(argv):
     bar.Title = {"J": "J = det F", "energy_density": "energy density", "displacement": "|u|"}[a.field]
     bar.ComponentTitle = ""
     bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
-    bar.Visibility = 1
+    bar.Visibility = 0 if a.skin else 1
     bar.WindowLocation = "Any Location"
     bar.Position = [0.85, 0.2]
     bar.ScalarBarLength = 0.6

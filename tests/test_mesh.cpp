@@ -7,6 +7,8 @@
 
 #include <sinew/core/xml_input.hpp>
 #include <sinew/discretization/mesh_file.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
+#include <sinew/scenes/region.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/materials/models.hpp>
 #include <sinew/scenes/scene.hpp>
@@ -16,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -627,4 +630,200 @@ TEST(Surface, BoundarySurfacesAreClosedOutwardAndCountedOnAnyNumberOfRanks) {
         }
     }
   }
+}
+
+namespace {
+
+// A unit cube as STL triangles (outward), ASCII or binary.
+std::string cube_stl(bool binary) {
+  const double c[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const int q[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  std::vector<std::array<int, 3>> tris;
+  for (const auto& f : q) {
+    tris.push_back({f[0], f[1], f[2]});
+    tris.push_back({f[0], f[2], f[3]});
+  }
+  std::string out;
+  if (!binary) {
+    out = "solid cube\n";
+    for (const auto& t : tris) {
+      out += " facet normal 0 0 0\n  outer loop\n";
+      for (int v : t) out += "   vertex " + std::to_string(c[v][0]) + " " + std::to_string(c[v][1]) + " " + std::to_string(c[v][2]) + "\n";
+      out += "  endloop\n endfacet\n";
+    }
+    return out + "endsolid cube\n";
+  }
+  out.assign(80, ' ');
+  const std::uint32_t n = static_cast<std::uint32_t>(tris.size());
+  out.append(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : tris) {
+    float rec[12] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) rec[3 + 3 * k + d] = static_cast<float>(c[t[k]][d]);
+    out.append(reinterpret_cast<const char*>(rec), 48);
+    out.append(2, '\0');
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Voxelize, SurfacesAreReadCheckedClosedAndFilled) {
+  // STL, ASCII and binary: corners merged into 8 vertices; the inside test and the voxelizer on them.
+  for (const bool binary : {false, true}) {
+    const TriangleSurface cube = read_triangle_surface(write_file(binary ? "cube_bin.stl" : "cube.stl", cube_stl(binary)));
+    EXPECT_EQ(cube.vertices.size(), 8u);
+    EXPECT_EQ(cube.triangles.size(), 12u);
+    const InsideTest in(cube);
+    EXPECT_TRUE(in.inside({0.5, 0.5, 0.5}));
+    EXPECT_TRUE(in.inside({0.25, 0.5, 0.75}));  // a ray through the cube's edges and diagonals
+    EXPECT_FALSE(in.inside({1.5, 0.5, 0.5}));
+    EXPECT_FALSE(in.inside({-0.5, 0.5, 0.5}));
+    const Lattice L = voxelize(cube, 0.25);
+    EXPECT_EQ(L.mesh.elements(), 64u);
+    EXPECT_EQ(L.mesh.nodes(), 125u);
+  }
+  // An open surface (one triangle missing) is named.
+  std::string cube = cube_stl(false);
+  const auto cut = cube.find(" facet", cube.find(" facet") + 1);
+  cube.erase(cut, cube.find("endfacet", cut) + 9 - cut);
+  try {
+    read_triangle_surface(write_file("open.stl", cube));
+    ADD_FAILURE() << "an open surface was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the surface is not closed: the edge from vertex"), std::string::npos) << e.what();
+  }
+  // The ball: cells whose centres lie inside the icosphere's inscribed sphere are kept, those outside
+  // its circumscribed sphere are not; the lattice's volume is the ball's to the cells' resolution.
+  const TriangleSurface ball = read_triangle_surface(mesh_path("ball.obj"));
+  EXPECT_EQ(ball.triangles.size(), 320u);
+  double r_in = 1.0;
+  for (const auto& t : ball.triangles) {
+    const auto &a = ball.vertices[t[0]], &b = ball.vertices[t[1]], &c = ball.vertices[t[2]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    r_in = std::min(r_in, std::fabs(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / len);
+  }
+  // Triangles flipped at random (as some exporters write them) come back consistent and outward.
+  {
+    std::ifstream in(mesh_path("ball.obj"));
+    std::string text, line;
+    int f = 0;
+    while (std::getline(in, line)) {
+      if (line.rfind("f ", 0) == 0 && (f++ % 3 == 0)) {
+        std::istringstream ss(line.substr(2));
+        std::string a, b, c;
+        ss >> a >> b >> c;
+        line = "f " + a + " " + c + " " + b;
+      }
+      text += line + "\n";
+    }
+    TriangleSurface flipped = read_triangle_surface(write_file("flipped.obj", text));
+    Obj o;
+    o.v = flipped.vertices;
+    o.f = flipped.triangles;
+    EXPECT_NEAR(check_closed(o, "flipped ball"), 4.0, 0.2);  // the icosphere's volume, positive: outward
+  }
+  const Lattice L = voxelize(ball, 0.125);
+  std::size_t kept = 0;
+  for (int k = 0; k < L.cells[2]; ++k)
+    for (int j = 0; j < L.cells[1]; ++j)
+      for (int i = 0; i < L.cells[0]; ++i) {
+        const double c[3] = {L.origin[0] + (i + 0.5) * L.h, L.origin[1] + (j + 0.5) * L.h, L.origin[2] + (k + 0.5) * L.h};
+        const double r = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        const bool in = L.cell_element[(static_cast<std::size_t>(k) * L.cells[1] + j) * L.cells[0] + i] >= 0;
+        if (r < r_in - 1e-9) EXPECT_TRUE(in) << "cell centre at radius " << r;
+        if (r > 1.0 + 1e-9) EXPECT_FALSE(in) << "cell centre at radius " << r;
+        kept += in;
+      }
+  EXPECT_EQ(kept, L.mesh.elements());
+  const double V = static_cast<double>(kept) * std::pow(0.125, 3), ball_volume = 4.0 / 3.0 * M_PI;
+  EXPECT_NEAR(V / ball_volume, 1.0, 0.05);
+  for (std::size_t e = 0; e < L.mesh.elements(); ++e) EXPECT_NEAR(hex_volume(L.mesh, e), std::pow(0.125, 3), 1e-15);
+  if (world()->getRank() == 0)
+    std::printf("[ info ] ball voxelized at h = 0.125: %zu cells, volume %.4f of %.4f; inscribed radius %.4f\n", kept, V,
+                ball_volume, r_in);
+}
+
+TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
+  // The ball filled with cells of 0.25; every node moved by one affine map (all nodes prescribed):
+  // trilinear interpolation reproduces an affine field, so every skin vertex must land on the affine
+  // image of its rest position, on any number of ranks. A bone given as a surface takes exactly the
+  // lattice nodes inside it.
+  const std::string xml = R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="ball"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="voxelize"/>
+    <Parameter name="Surface" type="string" value=")x" + mesh_path("ball.obj") + R"x("/>
+    <Parameter name="Cell size" type="double" value="0.25"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1.0"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value="1"/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="everything">
+        <Parameter name="Region" type="string" value="all"/>
+        <Parameter name="Motion" type="string" value="affine"/>
+        <Parameter name="Gradient" type="Array(double)" value="{0.2, 0.1, 0, 0, -0.1, 0.05, 0.1, 0, 0.3}"/>
+        <Parameter name="Displacement" type="Array(double)" value="{0.5, 0, -0.25}"/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value="false"/>
+    <Parameter name="Checkpoint every" type="int" value="0"/>
+  </ParameterList>
+</ParameterList>)x";
+  const std::string dir = "test_results/voxel_ball" + tag();
+  Simulation sim(config(xml, dir), RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const TriangleSurface ball = read_triangle_surface(mesh_path("ball.obj"));
+  const double G[9] = {0.2, 0.1, 0, 0, -0.1, 0.05, 0.1, 0, 0.3}, d[3] = {0.5, 0, -0.25};
+  double err = 0.0;
+  for (int step : {0, 1}) {
+    const Obj skin = read_obj(dir + "/skin_00000" + std::to_string(step) + ".obj");
+    ASSERT_EQ(skin.v.size(), ball.vertices.size());
+    ASSERT_EQ(skin.f.size(), ball.triangles.size());
+    for (std::size_t v = 0; v < skin.v.size(); ++v)
+      for (int i = 0; i < 3; ++i) {
+        double expect = ball.vertices[v][i];
+        if (step == 1) {
+          expect += d[i];
+          for (int j = 0; j < 3; ++j) expect += G[3 * i + j] * ball.vertices[v][j];
+        }
+        err = std::max(err, std::fabs(skin.v[v][i] - expect));
+      }
+    EXPECT_GT(check_closed(skin, "skin"), 3.5);  // closed, consistently oriented, outward (the ball: 4.19)
+  }
+  EXPECT_LT(err, 1e-9);  // the OBJ holds 10 significant digits
+  if (world()->getRank() == 0) std::printf("[ info ] skin vertices vs the affine map: max error %.2e\n", err);
+
+  // The bone region: the nodes inside core.obj, the same as testing every lattice node directly.
+  SceneConfig c = config(xml, dir + "_bone");
+  RegionParameters bone;
+  bone.region = "inside";
+  bone.surface = mesh_path("core.obj");
+  const Mesh& mesh = sim.scene().system().mesh();
+  const std::vector<int> nodes = select_region(mesh, *world(), bone, "bone");
+  const TriangleSurface core = read_triangle_surface(mesh_path("core.obj"));
+  const InsideTest in(core);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  long long mine = 0, total = 0, expect_total = 0;
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
+    const bool picked = std::binary_search(nodes.begin(), nodes.end(), static_cast<int>(n));
+    EXPECT_EQ(picked, in.inside({X(n, 0), X(n, 1), X(n, 2)}));
+    const double r = std::sqrt(X(n, 0) * X(n, 0) + X(n, 1) * X(n, 1) + X(n, 2) * X(n, 2));
+    if (r < 0.3) EXPECT_TRUE(picked);  // well inside the core (inscribed radius about 0.33)
+    if (r > 0.35) EXPECT_FALSE(picked);
+    if (n < mesh.n_owned_nodes) mine += picked;
+  }
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, 1, &mine, &total);
+  // Lattice nodes at multiples of 0.25 around the centre: (0,0,0) and its 6 neighbours at 0.25 lie inside.
+  expect_total = 7;
+  EXPECT_EQ(total, expect_total);
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Results as users see them: run a small scene on a Gmsh mesh, open its output with meshio and
 # ParaView (tests/read_results.py), render it with sinew-render (one step and a strip) and plot it with
-# sinew-plot, and check the pictures: the asked size, and not blank.
+# sinew-plot, render a voxelized ball's carried skin, and check the pictures: the asked size, and not
+# blank.
 # Usage: viewer_test.sh SINEW SCENE OUTDIR [launcher words...]
 set -euo pipefail
 sinew=$1 scene=$2 out=$3
@@ -16,11 +17,14 @@ t0=$(date +%s%N)
 t1=$(date +%s%N)
 "$scripts/sinew-render" "$out" --steps strip:3 --size 900x400 -o "$out/strip.png"
 "$scripts/sinew-plot" "$out" -o "$out/convergence.png"
+# A voxelized body: its carried skin rendered with --skin.
+"$@" "$sinew" --output "$out/ball" "$here/scenes/voxel_ball.xml" > /dev/null
+"$scripts/sinew-render" "$out/ball" --skin --steps strip:3 --size 800x300 -o "$out/skin.png"
 /usr/bin/python3 - "$out" <<'PY'
 import sys
 from PIL import Image
 out = sys.argv[1]
-for name, size in (("one.png", (640, 480)), ("strip.png", (900, 400)), ("convergence.png", None)):
+for name, size in (("one.png", (640, 480)), ("strip.png", (900, 400)), ("convergence.png", None), ("skin.png", (800, 300))):
     im = Image.open(f"{out}/{name}").convert("RGB")
     assert size is None or im.size == size, f"{name}: size {im.size}, expected {size}"
     colours = len(set(im.getdata()))

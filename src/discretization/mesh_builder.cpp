@@ -2,12 +2,27 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/partition.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
 
 namespace sinew {
 
 Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
-  if (p.type != "file") return build_mesh(lattice_spec(p), comm);
+  if (p.type != "file" && p.type != "voxelize") return build_mesh(lattice_spec(p), comm);
   MeshFile file;
+  std::shared_ptr<EmbeddedSurface> skin;
+  if (p.type == "voxelize") {  // rank 0 fills the surface with cells, then it is distributed like a file
+    collectively(raw_comm(comm), [&] {
+      if (comm.getRank() != 0) return;
+      const TriangleSurface surface = read_triangle_surface(p.surface);
+      Lattice lattice = voxelize(surface, p.cell_size);
+      skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice));
+      file = std::move(lattice.mesh);
+    });
+    Mesh mesh = distribute_mesh(std::move(file), comm);
+    mesh.embedded = skin;
+    mesh.has_embedded = true;
+    return mesh;
+  }
   // Only rank 0 reads; its failure (a missing or broken file) must reach the others, which would
   // otherwise wait for the distribution forever.
   collectively(raw_comm(comm), [&] {

@@ -4,6 +4,7 @@
 #include <sinew/driver/config.hpp>
 
 #include <sinew/discretization/mesh_file.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
 
 #include <algorithm>
 #include <filesystem>
@@ -30,12 +31,25 @@ SceneConfig read_scene(const std::string& path) {
     if (!f.empty() && std::filesystem::path(f).is_relative()) f = (folder / f).lexically_normal().string();
   };
   resolve(c.params.mesh.file);
+  resolve(c.params.mesh.surface);
   resolve(c.params.skeleton.motion_file);
+  for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
+  for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
   return c;
 }
 
 void check_mesh_file(const SceneConfig& c) {
   const SceneFileParameters& p = c.params;
+  try {
+    // Closed surfaces (a voxelized body, 'inside' regions) are small: read and check them whole.
+    if (p.mesh.type == "voxelize") read_triangle_surface(p.mesh.surface);
+    for (const auto& [name, bc] : p.loading.conditions)
+      if (bc.region.region == "inside") read_triangle_surface(bc.region.surface);
+    for (const auto& [name, bone] : p.skeleton.bones)
+      if (bone.region.region == "inside") read_triangle_surface(bone.region.surface);
+  } catch (const InputError& e) {
+    throw e.prefixed(c.file + ": ");
+  }
   if (p.mesh.type != "file") return;
   try {
     const MeshGroups g = read_mesh_groups(p.mesh.file);
@@ -70,6 +84,8 @@ std::string describe(const SceneConfig& c) {
   if (!p.description.empty()) os << "  " << p.description << "\n";
   if (p.mesh.type == "file")
     os << "mesh: file " << p.mesh.file << "\n";
+  else if (p.mesh.type == "voxelize")
+    os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling " << p.mesh.surface << "\n";
   else
     os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
        << " x " << p.mesh.cells[2] << " cells\n";

@@ -227,6 +227,12 @@ void Output::write_step(int step, double load, const Vector& u) {
     std::ostringstream what;
     what << "step " << step << ", load " << load;
     surface_->write_obj(surface_file(step), u, what.str());
+    if (sys_.mesh().has_embedded) {  // a voxelized body: its own skin, carried by the lattice
+      if (!skin_) skin_ = std::make_unique<EmbeddedSkin>(sys_.mesh(), u.getMap());
+      std::ostringstream path;
+      path << dir_ << "/skin_" << std::setw(6) << std::setfill('0') << step << ".obj";
+      skin_->write_obj(path.str(), u, what.str());
+    }
   }
   if (!params_.hdf5) return;
   const Mesh& m = sys_.mesh();

@@ -4,6 +4,8 @@
 
 #include "durable_file.hpp"
 
+#include <Tpetra_Import.hpp>
+#include <Tpetra_Map.hpp>
 #include <Tpetra_Vector.hpp>
 
 #include <algorithm>
@@ -27,6 +29,72 @@ struct Face {
 };
 
 }  // namespace
+
+void write_obj_file(const std::string& path, const std::vector<double>& x, const std::vector<std::array<int, 3>>& triangles,
+                    const std::string& comment) {
+  // Area-weighted vertex normals: the sum of the (unnormalized) cross products of the triangles around.
+  std::vector<double> normal(x.size(), 0.0);
+  for (const auto& t : triangles) {
+    const double* p0 = &x[3 * t[0]];
+    const double* p1 = &x[3 * t[1]];
+    const double* p2 = &x[3 * t[2]];
+    const double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    for (int v : t)
+      for (int d = 0; d < 3; ++d) normal[3 * v + d] += c[d];
+  }
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) throw std::runtime_error("cannot write " + tmp);
+  std::fprintf(f, "# Sinew surface: %zu vertices, %zu triangles; %s\n", x.size() / 3, triangles.size(), comment.c_str());
+  for (std::size_t v = 0; v < x.size() / 3; ++v) std::fprintf(f, "v %.10g %.10g %.10g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+  for (std::size_t v = 0; v < x.size() / 3; ++v) {
+    const double* m = &normal[3 * v];
+    const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    const double s = len > 0.0 ? 1.0 / len : 0.0;
+    std::fprintf(f, "vn %.6f %.6f %.6f\n", s * m[0], s * m[1], s * m[2]);
+  }
+  for (const auto& t : triangles)
+    std::fprintf(f, "f %d//%d %d//%d %d//%d\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1);
+  const bool ok = std::ferror(f) == 0;
+  if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
+  io_detail::replace_durably(tmp, path);
+}
+
+EmbeddedSkin::EmbeddedSkin(const Mesh& mesh, const Teuchos::RCP<const Map>& owned_dofs) : mesh_(mesh) {
+  // Rank 0 asks for the displacement of every node a skin vertex hangs on; the others ask for none.
+  std::vector<GO> want;
+  if (mesh.embedded) {
+    std::vector<GlobalId> nodes;
+    for (const auto& n : mesh.embedded->nodes) nodes.insert(nodes.end(), n.begin(), n.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (GlobalId g : nodes)
+      for (int c = 0; c < 3; ++c) want.push_back(3 * static_cast<GO>(g) + c);
+    for (std::size_t k = 0; k < nodes.size(); ++k) slot_[nodes[k]] = static_cast<int>(k);
+  }
+  const Teuchos::ArrayView<const GO> view(want.data(), static_cast<Teuchos::ArrayView<const GO>::size_type>(want.size()));
+  gathered_ = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(), view, 0, owned_dofs->getComm()));
+  import_ = Teuchos::rcp(new Import(owned_dofs, gathered_));
+}
+
+void EmbeddedSkin::write_obj(const std::string& path, const Vector& u, const std::string& comment) const {
+  Vector here(gathered_);
+  here.doImport(u, *import_, Tpetra::INSERT);
+  collectively(raw_comm(*gathered_->getComm()), [&] {
+    if (!mesh_.embedded) return;
+    const auto& s = *mesh_.embedded;
+    auto h = here.getLocalViewHost(Tpetra::Access::ReadOnly);
+    std::vector<double> x(3 * s.rest.size());
+    for (std::size_t v = 0; v < s.rest.size(); ++v)
+      for (int d = 0; d < 3; ++d) {
+        double ud = 0.0;
+        for (int a = 0; a < 8; ++a) ud += s.weights[v][a] * h(3 * slot_.at(s.nodes[v][a]) + d, 0);
+        x[3 * v + d] = s.rest[v][d] + ud;
+      }
+    write_obj_file(path, x, s.triangles, comment);
+  });
+}
 
 BoundarySurface::BoundarySurface(const Mesh& mesh, const Teuchos::Comm<int>& comm)
     : mesh_(mesh), comm_(raw_comm(comm)), root_(comm.getRank() == 0) {
@@ -123,34 +191,7 @@ void BoundarySurface::write_obj(const std::string& path, const Vector& u, const 
   std::vector<double> x(root_ ? 3 * n_vertices_ : 0);
   MPI_Gatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, x.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_);
   collectively(comm_, [&] {
-    if (!root_) return;
-    // Area-weighted vertex normals: the sum of the (unnormalized) cross products of the triangles around.
-    std::vector<double> normal(x.size(), 0.0);
-    for (const auto& t : triangles_) {
-      const double* p0 = &x[3 * t[0]];
-      const double* p1 = &x[3 * t[1]];
-      const double* p2 = &x[3 * t[2]];
-      const double a[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, b[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-      const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-      for (int v : t)
-        for (int d = 0; d < 3; ++d) normal[3 * v + d] += c[d];
-    }
-    const std::string tmp = path + ".tmp";
-    std::FILE* f = std::fopen(tmp.c_str(), "w");
-    if (!f) throw std::runtime_error("cannot write " + tmp);
-    std::fprintf(f, "# Sinew boundary surface: %lld vertices, %lld triangles; %s\n", n_vertices_, n_triangles_, comment.c_str());
-    for (std::size_t v = 0; v < x.size() / 3; ++v) std::fprintf(f, "v %.10g %.10g %.10g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
-    for (std::size_t v = 0; v < x.size() / 3; ++v) {
-      const double* m = &normal[3 * v];
-      const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-      const double s = len > 0.0 ? 1.0 / len : 0.0;
-      std::fprintf(f, "vn %.6f %.6f %.6f\n", s * m[0], s * m[1], s * m[2]);
-    }
-    for (const auto& t : triangles_)
-      std::fprintf(f, "f %d//%d %d//%d %d//%d\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1);
-    const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
-    io_detail::replace_durably(tmp, path);
+    if (root_) write_obj_file(path, x, triangles_, comment);
   });
 }
 

@@ -4,11 +4,13 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/core/parameters.hpp>
 #include <sinew/discretization/mesh_file.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
 #include <sinew/scenes/region.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 
 namespace sinew {
 
@@ -61,6 +63,11 @@ std::function<bool(const std::array<double, 3>&)> predicate(const Mesh& mesh, co
     return [a, b, r](const std::array<double, 3>& X) { return segment_distance(X, a, b) <= r; };
   }
   if (region == "all") return [](const std::array<double, 3>&) { return true; };
+  if (region == "inside") {  // every rank reads the (small) surface and tests its own nodes
+    auto surface = std::make_shared<const TriangleSurface>(read_triangle_surface(p.surface));
+    auto test = std::make_shared<const InsideTest>(*surface);
+    return [surface, test](const std::array<double, 3>& X) { return test->inside(X); };
+  }
   throw InputError(where + ": unknown 'Region' \"" + region + "\"");
 }
 

@@ -17,6 +17,7 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,8 @@ inline const Choices<ElementType>& element_choices() {
 
 // The "Mesh" section of a scene.
 struct MeshParameters {
-  std::string type, file;
+  std::string type, file, surface;
+  double cell_size = 0.0;
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{};
   std::array<double, 3> lower{}, upper{};
@@ -45,11 +47,16 @@ struct MeshParameters {
   template <class V>
   void visit(V& v) {
     v.choice("Type", type, std::string("box"),
-             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}},
-             "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), or file");
+             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}, {"voxelize", "voxelize"}},
+             "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), file, or voxelize "
+             "(a hex8 lattice filling a closed surface)");
     v.entry("File", file, std::string(""),
             "file: a Gmsh mesh (.msh, format 4.1 or 2.2, ASCII or binary) of tet4 or hex8 elements; a relative "
             "path is taken from the scene file's folder");
+    v.entry("Surface", surface, std::string(""),
+            "voxelize: a closed triangle surface (.obj or .stl) to fill with hex8 cells; it is carried along and "
+            "written per output step as DIR/skin_NNNNNN.obj; a relative path is taken from the scene file's folder");
+    v.entry("Cell size", cell_size, 0.0, "voxelize: the edge length of the lattice cells", Range::non_negative());
     v.choice("Element", element, ElementType::Hex8, element_choices(),
              "hex8 (2x2x2 Gauss points) or tet4 (each lattice cell split into 6 tets, 1 point)");
     v.entry("Elements", cells, {4, 4, 4}, "cells along x, y, z (cylinder: across the diameter in x and y, along z)",
@@ -66,11 +73,21 @@ struct MeshParameters {
   void check(const Context& c) const {
     if (type == "file") {
       if (file.empty()) c.fail("missing entry 'File' (the mesh file of Type file)", InputErrorKind::MissingEntry);
-      for (const char* lattice_only : {"Element", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
+      for (const char* lattice_only : {"Element", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter",
+                                       "Jitter seed", "Surface", "Cell size"})
         if (c.given(lattice_only))
           c.fail("'" + std::string(lattice_only) + "' applies to generated meshes, not to Type file (the file says it)");
       return;
     }
+    if (type == "voxelize") {
+      if (surface.empty()) c.fail("missing entry 'Surface' (the closed surface to voxelize)", InputErrorKind::MissingEntry);
+      if (!(cell_size > 0.0)) c.fail("missing entry 'Cell size' (> 0) of the voxel lattice", InputErrorKind::MissingEntry);
+      for (const char* other : {"File", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
+        if (c.given(other)) c.fail("'" + std::string(other) + "' does not apply to Type voxelize (Surface and Cell size say it)");
+      if (c.given("Element") && element != ElementType::Hex8) c.fail("Type voxelize makes hex8 cells ('Element' tet4 is not offered)");
+      return;
+    }
+    if (c.given("Surface") || c.given("Cell size")) c.fail("'Surface' and 'Cell size' apply to Type voxelize only");
     if (c.given("File")) c.fail("'File' applies to Type file only");
     if (!c.given("Elements")) c.fail("missing entry 'Elements' (cells along x, y, z)", InputErrorKind::MissingEntry);
     for (int k = 0; k < 3; ++k)
@@ -92,6 +109,15 @@ struct MeshSpec {
 MeshSpec lattice_spec(const MeshParameters& p);
 
 using GlobalId = long long;
+
+// A triangle surface carried along by the mesh (a voxelized character's skin): each vertex moves with
+// the displacement interpolated from eight nodes (global ids) by fixed weights.
+struct EmbeddedSurface {
+  std::vector<std::array<double, 3>> rest;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<std::array<GlobalId, 8>> nodes;
+  std::vector<std::array<double, 8>> weights;
+};
 
 // One rank's part of the mesh. Host-side vectors describe the layout; Views hold what kernels read.
 //
@@ -133,6 +159,9 @@ struct Mesh {
   GlobalId first_output_node = 0, first_output_element = 0;
   std::vector<GlobalId> node_output_id;
   long long reoriented = 0;  // elements of a mesh file reordered to positive orientation (all ranks)
+  // The surface a voxelized mesh was made from (rank 0 holds it; has_embedded is set on every rank).
+  std::shared_ptr<const EmbeddedSurface> embedded;
+  bool has_embedded = false;
 
   std::size_t local_nodes() const { return node_gid.size(); }
   std::size_t local_elements() const { return element_gid.size(); }

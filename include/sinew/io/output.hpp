@@ -8,6 +8,7 @@
 //                          attributes: load fraction, step
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
+//   DIR/skin_NNNNNN.obj    a voxelized mesh's input surface carried along by the lattice
 //   DIR/log.csv            one row per converged load step
 //   DIR/newton.csv         one row per Newton iteration (residual, CG iterations, step length)
 //   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
@@ -110,6 +111,7 @@ class Output {
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
+  std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
   std::ofstream log_, newton_log_;
 };
 

@@ -12,6 +12,7 @@
 
 #include <sinew/algebra/elastic_system.hpp>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,28 @@ class BoundarySurface {
   std::vector<int> counts_, offsets_;           // rank 0: vertices per rank
   std::vector<std::array<int, 3>> triangles_;   // rank 0: vertex indices in gathered order
   long long n_triangles_ = 0, n_vertices_ = 0;
+};
+
+// Writes a triangle surface as a Wavefront OBJ with area-weighted vertex normals (x: 3 per vertex),
+// aside and then renamed into place. Throws std::runtime_error when the file cannot be written.
+void write_obj_file(const std::string& path, const std::vector<double>& x, const std::vector<std::array<int, 3>>& triangles,
+                    const std::string& comment);
+
+// The surface a voxelized mesh was made from, carried along by the lattice (Mesh::embedded): each
+// vertex moves with the displacement interpolated from its cell's eight nodes. Rank 0 gathers those
+// nodes' displacements (a Tpetra import) and writes the OBJ.
+class EmbeddedSkin {
+ public:
+  // Collective.
+  EmbeddedSkin(const Mesh& mesh, const Teuchos::RCP<const Map>& owned_dofs);
+  // Collective.
+  void write_obj(const std::string& path, const Vector& u, const std::string& comment) const;
+
+ private:
+  const Mesh& mesh_;
+  Teuchos::RCP<const Map> gathered_;
+  Teuchos::RCP<const Import> import_;
+  std::map<GlobalId, int> slot_;  // rank 0: a node's place among the gathered ones
 };
 
 }  // namespace sinew

@@ -8,6 +8,8 @@
 //   group NAME[, NAME]    physical groups of a mesh file (their union): a surface, curve or point
 //                         group's nodes, or the nodes of a volume group's elements
 //   segment               the nodes within Radius of the segment from Segment start to Segment end
+//   inside                the nodes inside the closed triangle surface 'Surface' (.obj, .stl): a bone
+//                         given as a surface, for voxelized bodies
 #pragma once
 
 #include <sinew/core/errors.hpp>
@@ -21,7 +23,7 @@
 namespace sinew {
 
 struct RegionParameters {
-  std::string region;
+  std::string region, surface;
   std::array<double, 3> box_lower{}, box_upper{}, segment_start{}, segment_end{};
   double radius = 0.0;
 
@@ -30,13 +32,15 @@ struct RegionParameters {
     v.entry("Region", region, std::string(""),
             "which nodes (required): 'face x-' ... 'face z+' (a face of the bounding box), box, corners (four "
             "non-coplanar corners of the bounding box), all, 'group NAME' (a physical group of the mesh file), "
-            "segment (within 'Radius' of a segment)");
+            "segment (within 'Radius' of a segment), inside (a closed 'Surface')");
     v.entry("Box lower", box_lower, {0.0, 0.0, 0.0}, "box region: lower corner");
     v.entry("Box upper", box_upper, {0.0, 0.0, 0.0}, "box region: upper corner");
     v.entry("Segment start", segment_start, {0.0, 0.0, 0.0}, "segment region: one end");
     v.entry("Segment end", segment_end, {0.0, 0.0, 0.0}, "segment region: the other end");
     v.entry("Radius", radius, 0.0, "segment region: the distance from the segment within which nodes are taken",
             Range::non_negative());
+    v.entry("Surface", surface, std::string(""),
+            "inside region: a closed triangle surface (.obj or .stl; a relative path is taken from the scene file's folder)");
   }
   // The syntax of 'Region' (names of groups are checked against the mesh later).
   template <class Context>
@@ -51,9 +55,12 @@ struct RegionParameters {
         if (g.empty()) c.fail("'Region' needs group names: 'group NAME' or 'group NAME, NAME'");
     } else if (region == "segment") {
       if (!(radius > 0.0)) c.fail("a segment region needs 'Radius' > 0");
+    } else if (region == "inside") {
+      if (surface.empty()) c.fail("an inside region needs 'Surface' (a closed .obj or .stl)", InputErrorKind::MissingEntry);
     } else if (region != "box" && region != "corners" && region != "all") {
-      c.fail("unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all, group NAME, segment)");
+      c.fail("unknown 'Region' \"" + region + "\" (face x-..z+, box, corners, all, group NAME, segment, inside)");
     }
+    if (region != "inside" && c.given("Surface")) c.fail("'Surface' applies to an inside region only");
     if (region == "box")
       for (int k = 0; k < 3; ++k)
         if (!(box_upper[k] >= box_lower[k])) c.fail("'Box upper' must not lie below 'Box lower' in any coordinate");

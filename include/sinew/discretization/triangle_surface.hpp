@@ -1,0 +1,61 @@
+// Closed triangle surfaces (a character's skin, a bone) and the hex lattice that fills one, as the
+// paper builds its bone-driven characters (Sec. 6, Fig. 1: a character embedded in a hexahedral
+// lattice):
+//   read_triangle_surface   Wavefront OBJ (polygons fanned into triangles) or STL (ASCII or binary,
+//                           coincident vertices merged), checked to be closed: every edge on exactly
+//                           two triangles, or an error naming an open edge; then oriented consistently
+//                           and outward (exporters do not always keep one orientation)
+//   InsideTest              whether a point lies inside (parity of the crossings of a ray along +x)
+//   voxelize                the lattice of cells of a given size whose centres lie inside, as a mesh
+//                           file that distribute_mesh spreads over the ranks like any other
+//   embed                   each surface vertex bound to a lattice cell by trilinear weights, so that
+//                           the skin follows the flesh (written per output step, io/surface.hpp)
+#pragma once
+
+#include <sinew/discretization/mesh.hpp>
+#include <sinew/discretization/mesh_file.hpp>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace sinew {
+
+struct TriangleSurface {
+  std::string path;
+  std::vector<std::array<double, 3>> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  std::array<double, 3> lower{}, upper{};  // bounding box
+};
+
+// Throws InputError (kind File for an unreadable file, BadMesh for a broken or open surface).
+TriangleSurface read_triangle_surface(const std::string& path);
+
+class InsideTest {
+ public:
+  explicit InsideTest(const TriangleSurface& s);
+  bool inside(const std::array<double, 3>& p) const;
+
+ private:
+  const TriangleSurface& s_;
+  int bins_ = 1;
+  double y0_ = 0.0, z0_ = 0.0, dy_ = 1.0, dz_ = 1.0;
+  std::vector<std::vector<int>> bin_;  // triangles whose y-z bounding box meets each (y, z) bin
+};
+
+// The hex8 lattice of cells of size h (aligned with the surface's bounding box) whose centres lie
+// inside. Throws InputError when no cell does.
+struct Lattice {
+  MeshFile mesh;
+  std::array<double, 3> origin{};
+  std::array<int, 3> cells{};
+  double h = 0.0;
+  std::vector<int> cell_element;  // per lattice cell: its element, or -1 outside
+};
+Lattice voxelize(const TriangleSurface& s, double h);
+
+// Binds every surface vertex to the kept cell that contains it (or the nearest one, for a vertex in a
+// cell whose centre was outside) by the trilinear weights of the cell's eight nodes.
+EmbeddedSurface embed(const TriangleSurface& s, const Lattice& lattice);
+
+}  // namespace sinew

@@ -1,0 +1,336 @@
+// Triangle surfaces: OBJ and STL readers, the closedness check, the inside test, voxelization and the
+// embedding of the surface in the lattice (triangle_surface.hpp).
+#include <sinew/core/errors.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace sinew {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& path, const std::string& why) { throw InputError(path + ": " + why, InputErrorKind::BadMesh); }
+
+std::string lower_ext(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  std::string e = dot == std::string::npos ? "" : path.substr(dot + 1);
+  for (auto& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+void read_obj(std::istream& in, TriangleSurface& s) {
+  std::string line;
+  long lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    std::istringstream ss(line);
+    std::string kind;
+    ss >> kind;
+    const std::string at = "line " + std::to_string(lineno) + ": ";
+    if (kind == "v") {
+      std::array<double, 3> p;
+      if (!(ss >> p[0] >> p[1] >> p[2]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+        bad(s.path, at + "a vertex needs three finite coordinates");
+      s.vertices.push_back(p);
+    } else if (kind == "f") {
+      std::vector<int> poly;
+      for (std::string item; ss >> item;) {
+        const long k = std::strtol(item.c_str(), nullptr, 10);  // "i", "i/t", "i/t/n", "i//n"
+        const long n = static_cast<long>(s.vertices.size());
+        const long idx = k < 0 ? n + k : k - 1;  // negative indices count back from the last vertex
+        if (k == 0 || idx < 0 || idx >= n) bad(s.path, at + "face vertex '" + item + "' is not a vertex defined before it");
+        poly.push_back(static_cast<int>(idx));
+      }
+      if (poly.size() < 3) bad(s.path, at + "a face needs at least three vertices");
+      for (std::size_t k = 1; k + 1 < poly.size(); ++k) s.triangles.push_back({poly[0], poly[k], poly[k + 1]});
+    }
+  }
+}
+
+// STL stores each triangle's corners: corners at the same coordinates become one vertex.
+int vertex_of(TriangleSurface& s, std::map<std::array<double, 3>, int>& index, const std::array<double, 3>& p) {
+  const auto [it, added] = index.emplace(p, static_cast<int>(s.vertices.size()));
+  if (added) s.vertices.push_back(p);
+  return it->second;
+}
+
+void read_stl(std::ifstream& in, TriangleSurface& s) {
+  std::map<std::array<double, 3>, int> index;
+  char header[80] = {};
+  in.read(header, 80);
+  std::uint32_t count = 0;
+  in.read(reinterpret_cast<char*>(&count), 4);
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<long long>(in.tellg());
+  // Binary when the size matches its triangle count (some binary files start with "solid" too).
+  const bool binary = in && size == 84 + 50LL * count;
+  in.clear();
+  in.seekg(0);
+  if (binary) {
+    in.seekg(84);
+    for (std::uint32_t t = 0; t < count; ++t) {
+      float f[12];
+      in.read(reinterpret_cast<char*>(f), 48);
+      char attr[2];
+      in.read(attr, 2);
+      std::array<int, 3> tri;
+      for (int c = 0; c < 3; ++c) {
+        const std::array<double, 3> p{f[3 + 3 * c], f[4 + 3 * c], f[5 + 3 * c]};
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+          bad(s.path, "triangle " + std::to_string(t + 1) + " has a non-finite corner");
+        tri[c] = vertex_of(s, index, p);
+      }
+      s.triangles.push_back(tri);
+    }
+    return;
+  }
+  std::string word;
+  std::array<int, 3> tri{};
+  int corner = 0;
+  while (in >> word) {
+    if (word != "vertex") continue;
+    std::array<double, 3> p;
+    if (!(in >> p[0] >> p[1] >> p[2]) || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      bad(s.path, "a 'vertex' needs three finite coordinates");
+    tri[corner++] = vertex_of(s, index, p);
+    if (corner == 3) {
+      s.triangles.push_back(tri);
+      corner = 0;
+    }
+  }
+  if (corner != 0) bad(s.path, "the file ends inside a facet");
+}
+
+// Closed: every edge on exactly two triangles. Then oriented: neighbours made to cross their shared
+// edge in opposite directions (a walk over the triangles flips those that do not: exporters, Gmsh's
+// among them, do not always keep one orientation), and the whole turned outward (positive volume).
+void check_closed_and_orient(TriangleSurface& s) {
+  std::map<std::pair<int, int>, std::vector<int>> edges;  // undirected edge -> triangles
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const auto& T = s.triangles[t];
+    if (T[0] == T[1] || T[1] == T[2] || T[0] == T[2]) bad(s.path, "triangle " + std::to_string(t + 1) + " repeats a vertex");
+    for (int a = 0; a < 3; ++a) edges[{std::min(T[a], T[(a + 1) % 3]), std::max(T[a], T[(a + 1) % 3])}].push_back(static_cast<int>(t));
+  }
+  auto vtx = [&](int v) {
+    std::ostringstream os;
+    os << "vertex " << v + 1 << " (" << s.vertices[v][0] << ", " << s.vertices[v][1] << ", " << s.vertices[v][2] << ")";
+    return os.str();
+  };
+  for (const auto& [e, tris] : edges) {
+    if (tris.size() == 1)
+      bad(s.path, "the surface is not closed: the edge from " + vtx(e.first) + " to " + vtx(e.second) +
+                      " has a triangle on one side only");
+    if (tris.size() > 2)
+      bad(s.path, "the surface is not a closed manifold: " + std::to_string(tris.size()) + " triangles meet at the edge from " +
+                      vtx(e.first) + " to " + vtx(e.second));
+  }
+  auto runs = [](const std::array<int, 3>& T, int a, int b) {  // does T go a -> b?
+    for (int k = 0; k < 3; ++k)
+      if (T[k] == a && T[(k + 1) % 3] == b) return true;
+    return false;
+  };
+  std::vector<char> seen(s.triangles.size(), 0);
+  for (std::size_t start = 0; start < s.triangles.size(); ++start) {
+    if (seen[start]) continue;
+    seen[start] = 1;
+    std::vector<int> stack{static_cast<int>(start)};
+    while (!stack.empty()) {
+      const int t = stack.back();
+      stack.pop_back();
+      const auto T = s.triangles[t];
+      for (int a = 0; a < 3; ++a) {
+        const int u = T[a], v = T[(a + 1) % 3];
+        for (int n : edges[{std::min(u, v), std::max(u, v)}]) {
+          if (n == t || seen[n]) continue;
+          if (runs(s.triangles[n], u, v)) std::swap(s.triangles[n][1], s.triangles[n][2]);
+          seen[n] = 1;
+          stack.push_back(n);
+        }
+      }
+    }
+  }
+  double volume = 0.0;
+  for (const auto& T : s.triangles) {
+    const auto &a = s.vertices[T[0]], &b = s.vertices[T[1]], &c = s.vertices[T[2]];
+    volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  if (volume < 0.0)
+    for (auto& T : s.triangles) std::swap(T[1], T[2]);
+}
+
+}  // namespace
+
+TriangleSurface read_triangle_surface(const std::string& path) {
+  TriangleSurface s;
+  s.path = path;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the surface file", InputErrorKind::File);
+  const std::string ext = lower_ext(path);
+  if (ext == "obj")
+    read_obj(in, s);
+  else if (ext == "stl")
+    read_stl(in, s);
+  else
+    bad(path, "unknown surface format '." + ext + "' (Sinew reads .obj and .stl)");
+  if (s.triangles.size() < 4) bad(path, "the surface has " + std::to_string(s.triangles.size()) + " triangles: no closed surface");
+  check_closed_and_orient(s);
+  s.lower = s.upper = s.vertices.front();
+  for (const auto& p : s.vertices)
+    for (int d = 0; d < 3; ++d) {
+      s.lower[d] = std::min(s.lower[d], p[d]);
+      s.upper[d] = std::max(s.upper[d], p[d]);
+    }
+  return s;
+}
+
+InsideTest::InsideTest(const TriangleSurface& s) : s_(s) {
+  bins_ = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(s.triangles.size()) / 4.0)));
+  y0_ = s.lower[1];
+  z0_ = s.lower[2];
+  dy_ = std::max(s.upper[1] - s.lower[1], 1e-300) / bins_;
+  dz_ = std::max(s.upper[2] - s.lower[2], 1e-300) / bins_;
+  bin_.assign(static_cast<std::size_t>(bins_) * bins_, {});
+  auto clampi = [&](double v) { return std::clamp(static_cast<int>(std::floor(v)), 0, bins_ - 1); };
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    double ylo = HUGE_VAL, yhi = -HUGE_VAL, zlo = HUGE_VAL, zhi = -HUGE_VAL;
+    for (int v : s.triangles[t]) {
+      ylo = std::min(ylo, s.vertices[v][1]);
+      yhi = std::max(yhi, s.vertices[v][1]);
+      zlo = std::min(zlo, s.vertices[v][2]);
+      zhi = std::max(zhi, s.vertices[v][2]);
+    }
+    for (int j = clampi((ylo - y0_) / dy_); j <= clampi((yhi - y0_) / dy_); ++j)
+      for (int k = clampi((zlo - z0_) / dz_); k <= clampi((zhi - z0_) / dz_); ++k) bin_[j * bins_ + k].push_back(static_cast<int>(t));
+  }
+}
+
+bool InsideTest::inside(const std::array<double, 3>& p) const {
+  for (int d = 0; d < 3; ++d)
+    if (p[d] < s_.lower[d] || p[d] > s_.upper[d]) return false;
+  // A ray along +x from p, nudged off the lattice's planes by tiny irrational offsets so that it meets
+  // no edge or vertex exactly (lattice points and meshed surfaces often line up).
+  const double scale = std::max({s_.upper[0] - s_.lower[0], s_.upper[1] - s_.lower[1], s_.upper[2] - s_.lower[2]});
+  const double y = p[1] + 1.0e-9 * 0.6180339887 * scale, z = p[2] + 1.0e-9 * 0.4142135623 * scale;
+  const int j = std::clamp(static_cast<int>(std::floor((y - y0_) / dy_)), 0, bins_ - 1);
+  const int k = std::clamp(static_cast<int>(std::floor((z - z0_) / dz_)), 0, bins_ - 1);
+  int crossings = 0;
+  for (int t : bin_[j * bins_ + k]) {
+    const auto& A = s_.vertices[s_.triangles[t][0]];
+    const auto& B = s_.vertices[s_.triangles[t][1]];
+    const auto& C = s_.vertices[s_.triangles[t][2]];
+    // Barycentric coordinates of (y, z) in the triangle projected on the y-z plane.
+    const double d = (B[1] - A[1]) * (C[2] - A[2]) - (C[1] - A[1]) * (B[2] - A[2]);
+    if (d == 0.0) continue;  // edge-on to the ray
+    const double u = ((y - A[1]) * (C[2] - A[2]) - (C[1] - A[1]) * (z - A[2])) / d;
+    const double v = ((B[1] - A[1]) * (z - A[2]) - (y - A[1]) * (B[2] - A[2])) / d;
+    if (u < 0.0 || v < 0.0 || u + v > 1.0) continue;
+    const double x = A[0] + u * (B[0] - A[0]) + v * (C[0] - A[0]);
+    if (x > p[0]) ++crossings;
+  }
+  return crossings % 2 == 1;
+}
+
+Lattice voxelize(const TriangleSurface& s, double h) {
+  Lattice L;
+  L.h = h;
+  for (int d = 0; d < 3; ++d) {
+    const double extent = s.upper[d] - s.lower[d];
+    L.cells[d] = std::max(1, static_cast<int>(std::ceil(extent / h)));
+    L.origin[d] = 0.5 * (s.lower[d] + s.upper[d]) - 0.5 * L.cells[d] * h;  // centred on the surface
+  }
+  const long long total = static_cast<long long>(L.cells[0]) * L.cells[1] * L.cells[2];
+  if (total > 200000000LL)
+    throw InputError(s.path + ": 'Cell size' " + std::to_string(h) + " makes a lattice of " + std::to_string(total) +
+                     " cells around the surface; choose a larger cell size");
+  const InsideTest test(s);
+  const int nx = L.cells[0], ny = L.cells[1], nz = L.cells[2];
+  L.cell_element.assign(static_cast<std::size_t>(total), -1);
+  std::vector<int> node_id(static_cast<std::size_t>(nx + 1) * (ny + 1) * (nz + 1), -1);
+  MeshFile& m = L.mesh;
+  m.path = s.path;
+  m.format = "voxelized surface";
+  m.type = ElementType::Hex8;
+  auto node = [&](int i, int j, int k) {
+    int& id = node_id[(static_cast<std::size_t>(k) * (ny + 1) + j) * (nx + 1) + i];
+    if (id < 0) {
+      id = static_cast<int>(m.node_tag.size());
+      m.node_tag.push_back(id + 1);
+      m.xyz.insert(m.xyz.end(), {L.origin[0] + i * h, L.origin[1] + j * h, L.origin[2] + k * h});
+    }
+    return id;
+  };
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const std::array<double, 3> c{L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h};
+        if (!test.inside(c)) continue;
+        L.cell_element[(static_cast<std::size_t>(k) * ny + j) * nx + i] = static_cast<int>(m.element_tag.size());
+        // Gmsh / VTK hex8 order: the bottom face counter-clockwise seen from above, then the top.
+        const int hex[8] = {node(i, j, k),     node(i + 1, j, k),     node(i + 1, j + 1, k),     node(i, j + 1, k),
+                            node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)};
+        m.conn.insert(m.conn.end(), hex, hex + 8);
+        m.element_tag.push_back(static_cast<long long>(m.element_tag.size()) + 1);
+        m.element_group.push_back(-1);
+      }
+  if (m.element_tag.empty())
+    throw InputError(s.path + ": no lattice cell of size " + std::to_string(h) +
+                         " has its centre inside the surface; choose a smaller 'Cell size'",
+                     InputErrorKind::BadMesh);
+  return L;
+}
+
+EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L) {
+  EmbeddedSurface out;
+  out.rest = s.vertices;
+  out.triangles = s.triangles;
+  const int nx = L.cells[0], ny = L.cells[1], nz = L.cells[2];
+  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+    const auto& p = s.vertices[v];
+    int c[3];
+    for (int d = 0; d < 3; ++d) c[d] = std::clamp(static_cast<int>(std::floor((p[d] - L.origin[d]) / L.h)), 0, L.cells[d] - 1);
+    // The containing cell, or the kept cell nearest to the vertex within two cells around it.
+    int best = -1, bi = 0, bj = 0, bk = 0;
+    double best_d = HUGE_VAL;
+    for (int r = 0; r <= 2 && best < 0; ++r)
+      for (int k = std::max(0, c[2] - r); k <= std::min(nz - 1, c[2] + r); ++k)
+        for (int j = std::max(0, c[1] - r); j <= std::min(ny - 1, c[1] + r); ++j)
+          for (int i = std::max(0, c[0] - r); i <= std::min(nx - 1, c[0] + r); ++i) {
+            const int e = L.cell_element[(static_cast<std::size_t>(k) * ny + j) * nx + i];
+            if (e < 0) continue;
+            const double dx = L.origin[0] + (i + 0.5) * L.h - p[0], dy = L.origin[1] + (j + 0.5) * L.h - p[1],
+                         dz = L.origin[2] + (k + 0.5) * L.h - p[2];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best_d) {
+              best_d = d2;
+              best = e;
+              bi = i;
+              bj = j;
+              bk = k;
+            }
+          }
+    if (best < 0)
+      bad(s.path, "surface vertex " + std::to_string(v + 1) + " is more than two cells from the lattice; choose a smaller 'Cell size'");
+    // Trilinear weights in the cell (slightly outside it for a vertex in a neighbouring empty cell).
+    const double xi[3] = {(p[0] - (L.origin[0] + bi * L.h)) / L.h, (p[1] - (L.origin[1] + bj * L.h)) / L.h,
+                          (p[2] - (L.origin[2] + bk * L.h)) / L.h};
+    const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    std::array<GlobalId, 8> nodes;
+    std::array<double, 8> w;
+    for (int a = 0; a < 8; ++a) {
+      nodes[a] = L.mesh.conn[8 * static_cast<std::size_t>(best) + a];
+      w[a] = 1.0;
+      for (int d = 0; d < 3; ++d) w[a] *= corner[a][d] ? xi[d] : 1.0 - xi[d];
+    }
+    out.nodes.push_back(nodes);
+    out.weights.push_back(w);
+  }
+  return out;
+}
+
+}  // namespace sinew
