@@ -37,6 +37,10 @@ with meshio.xdmf.TimeSeriesReader(xdmf) as r:
         with h5py.File(os.path.join(results, f"step_{k:06d}.h5"), "r") as s:
             assert np.array_equal(point_data["displacement"], s["/displacement"][...]), f"step {k}: displacement"
             assert np.array_equal(cell_data["J"][0].ravel(), s["/J"][...].ravel()), f"step {k}: J"
+            assert np.array_equal(cell_data["energy_density"][0].ravel(), s["/energy_density"][...].ravel()), \
+                f"step {k}: energy_density"
+            # position = X + u, row by row (the XDMF geometry of each step)
+            assert np.allclose(s["/position"][...], X + s["/displacement"][...], rtol=0, atol=1e-14), f"step {k}: position"
             assert abs(t - s.attrs["load"]) < 1e-12, f"step {k}: time {t} vs load {s.attrs['load']}"
 last_u = point_data["displacement"]
 assert np.abs(last_u).max() > 0.1, "the last step is not deformed"

@@ -733,8 +733,12 @@ TEST(Voxelize, SurfacesAreReadCheckedClosedAndFilled) {
         const double c[3] = {L.origin[0] + (i + 0.5) * L.h, L.origin[1] + (j + 0.5) * L.h, L.origin[2] + (k + 0.5) * L.h};
         const double r = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
         const bool in = L.cell_element[(static_cast<std::size_t>(k) * L.cells[1] + j) * L.cells[0] + i] >= 0;
-        if (r < r_in - 1e-9) EXPECT_TRUE(in) << "cell centre at radius " << r;
-        if (r > 1.0 + 1e-9) EXPECT_FALSE(in) << "cell centre at radius " << r;
+        if (r < r_in - 1e-9) {
+          EXPECT_TRUE(in) << "cell centre at radius " << r;
+        }
+        if (r > 1.0 + 1e-9) {
+          EXPECT_FALSE(in) << "cell centre at radius " << r;
+        }
         kept += in;
       }
   EXPECT_EQ(kept, L.mesh.elements());
@@ -818,8 +822,12 @@ TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
     const bool picked = std::binary_search(nodes.begin(), nodes.end(), static_cast<int>(n));
     EXPECT_EQ(picked, in.inside({X(n, 0), X(n, 1), X(n, 2)}));
     const double r = std::sqrt(X(n, 0) * X(n, 0) + X(n, 1) * X(n, 1) + X(n, 2) * X(n, 2));
-    if (r < 0.3) EXPECT_TRUE(picked);  // well inside the core (inscribed radius about 0.33)
-    if (r > 0.35) EXPECT_FALSE(picked);
+    if (r < 0.3) {
+      EXPECT_TRUE(picked);  // well inside the core (inscribed radius about 0.33)
+    }
+    if (r > 0.35) {
+      EXPECT_FALSE(picked);
+    }
     if (n < mesh.n_owned_nodes) mine += picked;
   }
   Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, 1, &mine, &total);

@@ -2,8 +2,9 @@
 // Serial), from the same headers the solver uses (materials/, discretization/element_kernel.hpp,
 // local_csr.hpp: Kokkos only, no Trilinos), in one program:
 //
-//   device_kernels --test   every model x {hex8, tet4}: energy, force and stiffness values of each space
-//                           against Serial, to 1e-12 relative; exit 1 on a mismatch
+//   device_kernels --test   every model x {hex8, tet4} x {per element, per point}: energy, force and
+//                           stiffness values of each space against Serial per element, to 1e-12
+//                           relative; exit 1 on a mismatch
 //   device_kernels --bench  materials per second (energy + PK1 + projected Hessian) per model, and
 //                           elements per second (energy + force + stiffness, atomic CSR scatter) per
 //                           element type, on each space, with the device named
@@ -150,8 +151,11 @@ struct AssemblyResult {
 };
 
 // One space, one model, one element type: the element loop, `reps` times.
+enum class Variant { PerElement, PerPoint };
+
 template <class Exec, class Element, class Model>
-AssemblyResult assemble(const Model& model, const HostMesh& m, const std::vector<double>& u_host, int reps) {
+AssemblyResult assemble(const Model& model, const HostMesh& m, const std::vector<double>& u_host, int reps,
+                        Variant variant = Variant::PerElement) {
   using Mem = typename Exec::memory_space;
   std::vector<double> dNdX_h, wdetJ_h;
   geometry<Element>(m, dNdX_h, wdetJ_h);
@@ -182,14 +186,19 @@ AssemblyResult assemble(const Model& model, const HostMesh& m, const std::vector
   A.values = Kokkos::View<double*, Mem>("values", m.entries.size());
   Kokkos::View<double*, Mem> force("force", 3 * m.nodes);
   using Target = CrsTarget<LocalCsr<Mem>, Kokkos::View<double*, Mem>>;
-  ElementLoop<Element, Model, Target> loop;
-  loop.model = model;
-  loop.projection = Projection::Clamp;
-  loop.geometry = g;
-  loop.elements = to_view<Kokkos::View<int*, Mem>>("elements", ids);
-  loop.u = to_view<Kokkos::View<double*, Mem>>("u", u_host);
-  loop.target = Target{A, force, 3 * m.nodes};
-  loop.want_force = loop.want_matrix = true;
+  auto setup = [&](auto& loop) {
+    loop.model = model;
+    loop.projection = Projection::Clamp;
+    loop.geometry = g;
+    loop.elements = to_view<Kokkos::View<int*, Mem>>("elements", ids);
+    loop.u = to_view<Kokkos::View<double*, Mem>>("u", u_host);
+    loop.target = Target{A, force, 3 * m.nodes};
+    loop.want_force = loop.want_matrix = true;
+  };
+  ElementLoop<Element, Model, Target> per_element;
+  PointLoop<Element, Model, Target> per_point;
+  setup(per_element);
+  setup(per_point);
   AssemblyResult r;
   r.seconds = HUGE_VAL;
   for (int k = 0; k < reps; ++k) {
@@ -197,7 +206,10 @@ AssemblyResult assemble(const Model& model, const HostMesh& m, const std::vector
     Kokkos::deep_copy(force, 0.0);
     Exec().fence();
     const auto t0 = std::chrono::steady_clock::now();
-    Kokkos::parallel_reduce("sinew_element_loop", Kokkos::RangePolicy<Exec>(0, m.elements), loop, r.totals);
+    if (variant == Variant::PerElement)
+      Kokkos::parallel_reduce("sinew_element_loop", Kokkos::RangePolicy<Exec>(0, m.elements), per_element, r.totals);
+    else
+      Kokkos::parallel_reduce("sinew_point_loop", Kokkos::RangePolicy<Exec>(0, per_point.work_items()), per_point, r.totals);
     Exec().fence();
     r.seconds = std::min(r.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
@@ -267,8 +279,8 @@ std::vector<double> displacement(const HostMesh& m) {
 
 struct SpaceRun {
   std::string name;
-  AssemblyResult (*hex)(const MaterialSpec&, const HostMesh&, const std::vector<double>&, int);
-  AssemblyResult (*tet)(const MaterialSpec&, const HostMesh&, const std::vector<double>&, int);
+  AssemblyResult (*hex)(const MaterialSpec&, const HostMesh&, const std::vector<double>&, int, Variant);
+  AssemblyResult (*tet)(const MaterialSpec&, const HostMesh&, const std::vector<double>&, int, Variant);
   double (*material)(const MaterialSpec&, int, int);
   int concurrency;
 };
@@ -277,11 +289,11 @@ template <class Exec>
 SpaceRun space_run(const std::string& name) {
   SpaceRun s;
   s.name = name;
-  s.hex = [](const MaterialSpec& sp, const HostMesh& m, const std::vector<double>& u, int reps) {
-    return with_material(sp, [&](const auto& model) { return assemble<Exec, Hex8>(model, m, u, reps); });
+  s.hex = [](const MaterialSpec& sp, const HostMesh& m, const std::vector<double>& u, int reps, Variant v) {
+    return with_material(sp, [&](const auto& model) { return assemble<Exec, Hex8>(model, m, u, reps, v); });
   };
-  s.tet = [](const MaterialSpec& sp, const HostMesh& m, const std::vector<double>& u, int reps) {
-    return with_material(sp, [&](const auto& model) { return assemble<Exec, Tet4>(model, m, u, reps); });
+  s.tet = [](const MaterialSpec& sp, const HostMesh& m, const std::vector<double>& u, int reps, Variant v) {
+    return with_material(sp, [&](const auto& model) { return assemble<Exec, Tet4>(model, m, u, reps, v); });
   };
   s.material = [](const MaterialSpec& sp, int n, int reps) {
     return with_material(sp, [&](const auto& model) { return material_rate<Exec>(model, n, reps); });
@@ -322,30 +334,33 @@ int test(int cells) {
     for (std::size_t k = 0; k < material_model_names().size(); ++k) {
       const MaterialSpec sp = spec_of(k);
       AssemblyResult ref;
-      for (std::size_t s = 0; s < S.size(); ++s) {
-        const AssemblyResult r = tets ? S[s].tet(sp, m, u, 1) : S[s].hex(sp, m, u, 1);
-        if (s == 0) {
-          ref = r;
-          if (r.totals.inverted == 0) {  // the inverted branch of every model must be exercised
-            std::printf("FAIL %s %s: the test state should have inverted points (energy %g, %lld inverted)\n",
-                        material_model_names()[k].c_str(), tets ? "tet4" : "hex8", r.totals.energy, r.totals.inverted);
-            ++failures;
+      for (std::size_t s = 0; s < S.size(); ++s)
+        for (const Variant v : {Variant::PerElement, Variant::PerPoint}) {
+          const AssemblyResult r = tets ? S[s].tet(sp, m, u, 1, v) : S[s].hex(sp, m, u, 1, v);
+          if (s == 0 && v == Variant::PerElement) {
+            ref = r;
+            if (r.totals.inverted == 0) {  // the inverted branch of every model must be exercised
+              std::printf("FAIL %s %s: the test state should have inverted points (energy %g)\n", material_model_names()[k].c_str(),
+                          tets ? "tet4" : "hex8", r.totals.energy);
+              ++failures;
+            }
+            continue;
           }
-          continue;
+          // Neo-Hookean's energy is +inf at inverted points, on every space alike.
+          const bool both_inf = std::isinf(r.totals.energy) && std::isinf(ref.totals.energy);
+          const double de =
+              both_inf ? 0.0 : std::fabs(r.totals.energy - ref.totals.energy) / std::max(std::fabs(ref.totals.energy), 1e-300);
+          const double dv = std::fabs(r.totals.volume - ref.totals.volume) / ref.totals.volume;
+          const double df = rel(r.force, ref.force), dK = rel(r.values, ref.values);
+          const double d = std::max({de, dv, df, dK});
+          worst = std::max(worst, d);
+          const bool ok = d < 1e-12 && r.totals.inverted == ref.totals.inverted && r.totals.min_J == ref.totals.min_J;
+          failures += !ok;
+          const std::string what = std::string(tets ? "tet4 " : "hex8 ") + S[s].name + (v == Variant::PerPoint ? " per point" : "");
+          std::printf("%s %-28s %-22s vs Serial: energy %.1e volume %.1e force %.1e matrix %.1e inverted %lld/%lld\n",
+                      ok ? "ok  " : "FAIL", material_model_names()[k].c_str(), what.c_str(), de, dv, df, dK, r.totals.inverted,
+                      ref.totals.inverted);
         }
-        // Neo-Hookean's energy is +inf at inverted points, on every space alike.
-        const bool both_inf = std::isinf(r.totals.energy) && std::isinf(ref.totals.energy);
-        const double de = both_inf ? 0.0 : std::fabs(r.totals.energy - ref.totals.energy) / std::max(std::fabs(ref.totals.energy), 1e-300);
-        const double dv = std::fabs(r.totals.volume - ref.totals.volume) / ref.totals.volume;
-        const double df = rel(r.force, ref.force), dK = rel(r.values, ref.values);
-        const double d = std::max({de, dv, df, dK});
-        worst = std::max(worst, d);
-        const bool ok = d < 1e-12 && r.totals.inverted == ref.totals.inverted;
-        failures += !ok;
-        std::printf("%s %-28s %s vs Serial: energy %.1e volume %.1e force %.1e matrix %.1e inverted %lld/%lld\n", ok ? "ok  " : "FAIL",
-                    material_model_names()[k].c_str(), (std::string(tets ? "tet4 " : "hex8 ") + S[s].name).c_str(), de, dv, df, dK,
-                    r.totals.inverted, ref.totals.inverted);
-      }
     }
   }
   std::printf("%s: %d mismatches; largest relative difference %.2e (limit 1e-12); spaces:", failures ? "FAILED" : "PASSED",
@@ -375,12 +390,14 @@ int bench(int cells, int points, int reps) {
     std::printf("\n%s elements per second (stable-neohookean: energy + force + 24x24/12x12 stiffness, atomic CSR scatter), "
                 "%d elements, best of %d\n", tets ? "tet4" : "hex8", m.elements, reps);
     double base = 0.0;
-    for (const auto& s : S) {
-      const AssemblyResult r = tets ? s.tet(snh, m, u, reps) : s.hex(snh, m, u, reps);
-      const double rate = m.elements / r.seconds;
-      if (base == 0.0) base = rate;
-      std::printf("  %-8s %12.4g elements/s  (%.2fx Serial)\n", s.name.c_str(), rate, rate / base);
-    }
+    for (const auto& s : S)
+      for (const Variant v : {Variant::PerElement, Variant::PerPoint}) {
+        const AssemblyResult r = tets ? s.tet(snh, m, u, reps, v) : s.hex(snh, m, u, reps, v);
+        const double rate = m.elements / r.seconds;
+        if (base == 0.0) base = rate;
+        std::printf("  %-8s %-11s %12.4g elements/s  (%.2fx Serial per element)\n", s.name.c_str(),
+                    v == Variant::PerElement ? "per element" : "per point", rate, rate / base);
+      }
   }
   return 0;
 }

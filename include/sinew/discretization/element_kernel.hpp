@@ -84,12 +84,10 @@ KOKKOS_INLINE_FUNCTION void add_point_force(double* f, const Mat3& P, const doub
     }
 }
 
-// K_(ai)(bj) += w dN_a,J H_(iJ)(jL) dN_b,L, the chain rule of dF/du through vec(F) (Eq. 17): first
-// G = H contracted with dN_b, then dN_a contracted with G.
+// G_(r)(bj) = H_(r)(jL) dN_b,L: the point's Hessian contracted with the shape-function gradients, the
+// first half of K_(ai)(bj) = w dN_a,J H_(iJ)(jL) dN_b,L (the chain rule of dF/du through vec(F), Eq. 17).
 template <int NPE>
-KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9& H, const double dN[NPE][3], double w) {
-  constexpr int NDOF = 3 * NPE;
-  double G[9][NDOF];
+KOKKOS_INLINE_FUNCTION void stiffness_factor(double (*G)[3 * NPE], const Mat9& H, const double dN[NPE][3]) {
   for (int r = 0; r < 9; ++r)
     for (int b = 0; b < NPE; ++b)
       for (int j = 0; j < 3; ++j) {
@@ -97,15 +95,67 @@ KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9
         for (int L = 0; L < 3; ++L) s += H(r, j + 3 * L) * dN[b][L];
         G[r][3 * b + j] = s;
       }
+}
+
+// Row (a, i) of the point's stiffness: K_(ai)(c) = w (dN_a,0 G_(i)(c) + dN_a,1 G_(i+3)(c) + dN_a,2 G_(i+6)(c)).
+template <int NPE>
+KOKKOS_INLINE_FUNCTION void add_stiffness_row(double* Krow, const double (*G)[3 * NPE], const double dNa[3], int i, double w) {
+  const double w0 = w * dNa[0], w1 = w * dNa[1], w2 = w * dNa[2];
+  const double* G0 = G[i];
+  const double* G1 = G[i + 3];
+  const double* G2 = G[i + 6];
+  for (int c = 0; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
+}
+
+template <int NPE>
+KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9& H, const double dN[NPE][3], double w) {
+  double G[9][3 * NPE];
+  stiffness_factor<NPE>(G, H, dN);
   for (int a = 0; a < NPE; ++a)
-    for (int i = 0; i < 3; ++i) {
-      double* Krow = K[3 * a + i];
-      const double w0 = w * dN[a][0], w1 = w * dN[a][1], w2 = w * dN[a][2];
-      const double* G0 = G[i];
-      const double* G1 = G[i + 3];
-      const double* G2 = G[i + 6];
-      for (int c = 0; c < NDOF; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
-    }
+    for (int i = 0; i < 3; ++i) add_stiffness_row<NPE>(K[3 * a + i], G, dN[a], i, w);
+}
+
+// What one quadrature point of one element knows: its weight, shape functions and gradients, F, J and
+// the energy density (+inf where undefined, so that no merit function can accept such a state), and
+// the body force's work density.
+template <class Element>
+struct PointState {
+  static constexpr int NPE = Element::nodes;
+  double w = 0.0, J = 0.0, psi = 0.0, body_work = 0.0;
+  bool defined = true;
+  double dN[NPE][3], N[NPE];
+  Mat3 F;
+};
+
+template <class Element, class Model, class MemorySpace>
+KOKKOS_INLINE_FUNCTION void evaluate_point(const Model& model, const ElementGeometry<MemorySpace>& g, int e, int q,
+                                           const double ue[3 * Element::nodes], const double body[3], PointState<Element>& s) {
+  constexpr int NPE = Element::nodes;
+  const std::size_t p = static_cast<std::size_t>(e) * Element::points + q;
+  s.w = g.wdetJ(p);
+  for (int a = 0; a < NPE; ++a)
+    for (int J = 0; J < 3; ++J) s.dN[a][J] = g.dNdX(p, a, J);
+  s.F = Mat3::identity();
+  for (int a = 0; a < NPE; ++a)
+    for (int J = 0; J < 3; ++J)
+      for (int i = 0; i < 3; ++i) s.F(i, J) += ue[3 * a + i] * s.dN[a][J];
+  s.J = det(s.F);
+  s.defined = model.defined(s.F);
+  s.psi = s.defined ? model.energy(s.F) : HUGE_VAL;
+  Element::values(q, s.N);
+  s.body_work = 0.0;
+  for (int a = 0; a < NPE; ++a)
+    for (int i = 0; i < 3; ++i) s.body_work += s.N[a] * body[i] * ue[3 * a + i];
+}
+
+// Adds one point to a totals record.
+template <class Element>
+KOKKOS_INLINE_FUNCTION void add_point_totals(AssemblyTotals& t, const PointState<Element>& s) {
+  t.energy += s.w * (s.psi - s.body_work);
+  t.volume += s.w * s.J;
+  t.min_J = s.J < t.min_J ? s.J : t.min_J;
+  if (!(s.J > 0.0)) ++t.inverted;
+  if (!s.defined) ++t.undefined;
 }
 
 // ---- compute: the whole element --------------------------------------------------------------------
@@ -124,35 +174,14 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
       for (int c = 0; c < NDOF; ++c) r.K[a][c] = 0.0;
   double psi_sum = 0.0, J_sum = 0.0, w_sum = 0.0;
   for (int q = 0; q < Element::points; ++q) {
-    const std::size_t p = static_cast<std::size_t>(e) * Element::points + q;
-    const double w = g.wdetJ(p);
-    double dN[NPE][3];
-    for (int a = 0; a < NPE; ++a)
-      for (int J = 0; J < 3; ++J) dN[a][J] = g.dNdX(p, a, J);
-    Mat3 F = Mat3::identity();
-    for (int a = 0; a < NPE; ++a)
-      for (int J = 0; J < 3; ++J)
-        for (int i = 0; i < 3; ++i) F(i, J) += ue[3 * a + i] * dN[a][J];
-    const double Jdet = det(F);
-    // An undefined energy (Neo-Hookean inverted) is +inf to every merit function: such a state must
-    // never look acceptable.
-    const bool defined = model.defined(F);
-    const double psi = defined ? model.energy(F) : HUGE_VAL;
-    double N[NPE];
-    Element::values(q, N);
-    double body_work = 0.0;
-    for (int a = 0; a < NPE; ++a)
-      for (int i = 0; i < 3; ++i) body_work += N[a] * body[i] * ue[3 * a + i];
-    r.totals.energy += w * (psi - body_work);
-    r.totals.volume += w * Jdet;
-    r.totals.min_J = Jdet < r.totals.min_J ? Jdet : r.totals.min_J;
-    if (!(Jdet > 0.0)) ++r.totals.inverted;
-    if (!defined) ++r.totals.undefined;
-    psi_sum += w * psi;
-    J_sum += w * Jdet;
-    w_sum += w;
-    if (want_force) add_point_force<NPE>(r.f, model.pk1(F), dN, N, w, body);
-    if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(F, projection), dN, w);
+    PointState<Element> s;
+    evaluate_point<Element>(model, g, e, q, ue, body, s);
+    add_point_totals(r.totals, s);
+    psi_sum += s.w * s.psi;
+    J_sum += s.w * s.J;
+    w_sum += s.w;
+    if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.N, s.w, body);
+    if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, projection), s.dN, s.w);
   }
   r.psi_avg = psi_sum / w_sum;
   r.J_avg = J_sum / w_sum;
@@ -233,6 +262,72 @@ struct ElementLoop {
       }
     }
     scatter<Element>(target, dof, r, want_force, want_matrix);
+  }
+};
+
+// The same element loop split per quadrature point, the GPU-shaped alternative: work item (element,
+// point) computes its point's force and stiffness and scatters each stiffness row as soon as it is
+// made, so it never holds the 24x24 element matrix (on a GPU: fewer registers, 8x the parallelism of
+// hex8, 8x the atomic adds). Totals are the same sums in another order; per-element fields are not
+// offered (output uses ElementLoop).
+template <class Element, class Model, class Target>
+struct PointLoop {
+  using memory_space = typename Target::memory_space;
+  using value_type = AssemblyTotals;
+  Model model;
+  Projection projection = Projection::Clamp;
+  ElementGeometry<memory_space> geometry;
+  Kokkos::View<const int*, memory_space> elements;  // local element ids to visit
+  Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
+  double body[3] = {0.0, 0.0, 0.0};
+  Target target;
+  bool want_force = false, want_matrix = false;
+
+  int work_items() const { return static_cast<int>(elements.extent(0)) * Element::points; }
+  KOKKOS_INLINE_FUNCTION void init(value_type& t) const {
+    t = AssemblyTotals();
+    t.min_J = HUGE_VAL;
+  }
+  KOKKOS_INLINE_FUNCTION void join(value_type& a, const value_type& b) const { a.add(b); }
+#if KOKKOS_VERSION < 40000
+  KOKKOS_INLINE_FUNCTION void join(volatile value_type& a, const volatile value_type& b) const {
+    a.energy += b.energy;
+    a.volume += b.volume;
+    a.min_J = b.min_J < a.min_J ? b.min_J : a.min_J;
+    a.inverted += b.inverted;
+    a.undefined += b.undefined;
+  }
+#endif
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int item, value_type& totals) const {
+    constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
+    const int e = elements(item / Element::points), q = item % Element::points;
+    int dof[NDOF];
+    double ue[NDOF];
+    gather<Element>(geometry, u, e, dof, ue);
+    PointState<Element> s;
+    evaluate_point<Element>(model, geometry, e, q, ue, body, s);
+    if (e < geometry.n_owned) add_point_totals(totals, s);
+    if (want_force) {
+      double f[NDOF];
+      for (int k = 0; k < NDOF; ++k) f[k] = 0.0;
+      add_point_force<NPE>(f, model.pk1(s.F), s.dN, s.N, s.w, body);
+      for (int k = 0; k < NDOF; ++k)
+        if (dof[k] < target.owned_dofs) target.add_force(dof[k], f[k]);
+    }
+    if (want_matrix) {
+      double G[9][NDOF];
+      stiffness_factor<NPE>(G, model.projected_hessian(s.F, projection), s.dN);
+      for (int a = 0; a < NPE; ++a)
+        for (int i = 0; i < 3; ++i) {
+          const int row = dof[3 * a + i];
+          if (row >= target.owned_dofs) continue;
+          double Krow[NDOF];
+          for (int c = 0; c < NDOF; ++c) Krow[c] = 0.0;
+          add_stiffness_row<NPE>(Krow, G, s.dN[a], i, s.w);
+          target.add_row(row, dof, NDOF, Krow);
+        }
+    }
   }
 };
 
