@@ -43,10 +43,16 @@ void check_mesh_file(const SceneConfig& c) {
   try {
     // Closed surfaces (a voxelized body, 'inside' regions) are small: read and check them whole.
     if (p.mesh.type == "voxelize") read_triangle_surface(p.mesh.surface);
-    for (const auto& [name, bc] : p.loading.conditions)
-      if (bc.region.region == "inside") read_triangle_surface(bc.region.surface);
-    for (const auto& [name, bone] : p.skeleton.bones)
-      if (bone.region.region == "inside") read_triangle_surface(bone.region.surface);
+    auto surface = [](const RegionParameters& r, const std::string& where) {
+      if (r.region != "inside") return;
+      try {
+        read_triangle_surface(r.surface);
+      } catch (const InputError& e) {
+        throw e.prefixed(where + ": ");
+      }
+    };
+    for (const auto& [name, bc] : p.loading.conditions) surface(bc.region, "Loading/Boundary conditions/" + name);
+    for (const auto& [name, bone] : p.skeleton.bones) surface(bone.region, "Skeleton/Bones/" + name);
   } catch (const InputError& e) {
     throw e.prefixed(c.file + ": ");
   }

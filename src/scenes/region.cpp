@@ -64,7 +64,12 @@ std::function<bool(const std::array<double, 3>&)> predicate(const Mesh& mesh, co
   }
   if (region == "all") return [](const std::array<double, 3>&) { return true; };
   if (region == "inside") {  // every rank reads the (small) surface and tests its own nodes
-    auto surface = std::make_shared<const TriangleSurface>(read_triangle_surface(p.surface));
+    std::shared_ptr<const TriangleSurface> surface;
+    try {
+      surface = std::make_shared<const TriangleSurface>(read_triangle_surface(p.surface));
+    } catch (const InputError& e) {
+      throw e.prefixed(where + ": ");
+    }
     auto test = std::make_shared<const InsideTest>(*surface);
     return [surface, test](const std::array<double, 3>& X) { return test->inside(X); };
   }
