@@ -135,16 +135,16 @@ def main(argv):
     labels = a.labels.split(",") if a.labels else [os.path.basename(os.path.abspath(r)) for r in a.results]
     if len(labels) != len(a.results):
         fail(f"--labels gives {len(labels)} labels for {len(a.results)} folders")
-    # Panels: (xdmf, step, load, label), left to right.
-    panels, all_steps = [], []
+    # Panels: (xdmf, step, load, label), left to right; `shown`: their (step, load, h5 file).
+    panels, shown, all_steps = [], [], []
     for r, name in zip(a.results, labels):
         xdmf, steps = written_steps(r)
         chosen = choose(steps, a.steps)
         if len(a.results) > 1 and len(chosen) > 1:
             fail("with several folders --steps must pick one step (last, first or a number)")
         panels += [(xdmf, st, ld, name if len(a.results) > 1 else f"step {st}, load {ld:.3g}") for st, ld, _ in chosen]
+        shown += chosen
         all_steps += steps
-    chosen = [(st, ld, None) for _, st, ld, _ in panels]
     lo, hi = bounds_of_run(all_steps)
     if a.range:
         try:
@@ -153,9 +153,7 @@ def main(argv):
         except (ValueError, AssertionError):
             fail(f"--range '{a.range}' must be 'lo,hi' with lo < hi")
     else:
-        picked = [s for s in all_steps if any(s[0] == st and os.path.dirname(s[2]) == os.path.dirname(x)
-                                              for x, st, _, _ in panels)]
-        crange = field_range(picked, a.field)
+        crange = field_range(shown, a.field)
 
     from paraview import simple as pv  # after the argument checks: importing ParaView takes seconds
 
@@ -238,7 +236,7 @@ def main(argv):
     lut.AutomaticRescaleRangeMode = "Never"
     lut.RescaleTransferFunction(*crange)
     if a.title or n == 1:
-        step, load, _ = chosen[0]
+        step, load, _ = shown[0]
         text = a.title or f"{labels[0]}: step {step}, load {load:.3g}"
         tt = pv.Show(pv.Text(Text=text), view)
         tt.WindowLocation = "Upper Center"
@@ -274,7 +272,7 @@ def main(argv):
     view.CameraFocalPoint = list(centre + right * 0.09 * width / 0.82)
     view.CameraPosition = list(np.array(view.CameraFocalPoint) + direction * radius * 4.0)
     out = a.output or os.path.join(
-        a.results[0], f"render_step{chosen[0][0]:06d}.png" if n == 1 else
+        a.results[0], f"render_step{shown[0][0]:06d}.png" if n == 1 else
         "render_strip.png" if len(a.results) == 1 else "render_comparison.png")
     pv.SaveScreenshot(out, view, ImageResolution=[w, h], TransparentBackground=0)
     print(out)

@@ -21,18 +21,7 @@ inline Mat3 random_rotation(std::mt19937_64& rng) {
     len += x * x;
   }
   len = std::sqrt(len);
-  const double w = q[0] / len, x = q[1] / len, y = q[2] / len, z = q[3] / len;
-  Mat3 R;
-  R(0, 0) = 1 - 2 * (y * y + z * z);
-  R(0, 1) = 2 * (x * y - z * w);
-  R(0, 2) = 2 * (x * z + y * w);
-  R(1, 0) = 2 * (x * y + z * w);
-  R(1, 1) = 1 - 2 * (x * x + z * z);
-  R(1, 2) = 2 * (y * z - x * w);
-  R(2, 0) = 2 * (x * z - y * w);
-  R(2, 1) = 2 * (y * z + x * w);
-  R(2, 2) = 1 - 2 * (x * x + y * y);
-  return R;
+  return rotation_of_quaternion(q[0] / len, q[1] / len, q[2] / len, q[3] / len);
 }
 
 inline Mat3 with_singular_values(std::mt19937_64& rng, double s0, double s1, double s2) {

@@ -3,6 +3,7 @@
 // every rank the ghosts it needs; an affine patch test on a Gmsh mesh is exact for every model; a
 // twist on a Gmsh mesh is the same on 1 thread, 2 threads and 2 ranks; bone transforms compose
 // parents and interpolate keyframes and motion files as documented; bones move their nodes exactly.
+#include "scene_test_utils.hpp"
 #include "tpetra_test_utils.hpp"
 
 #include <sinew/core/xml_input.hpp>
@@ -27,7 +28,7 @@
 #include <sstream>
 
 using namespace sinew;
-using sinew::test::gather;
+using namespace sinew::test;
 
 namespace {
 
@@ -64,12 +65,6 @@ const std::vector<int>& node_group(const MeshFile& m, const std::string& name) {
   throw std::runtime_error("no node group " + name);
 }
 
-SceneConfig config(const std::string& xml, const std::string& out) {
-  SceneConfig c = make_scene(read_parameter_text(xml, "test scene"), "test scene");
-  c.params.output.directory = out;
-  return c;
-}
-
 // A scene on the Gmsh unit box (box.geo), with the given model, conditions and skeleton.
 std::string box_scene(const std::string& mesh, const std::string& model, double nu, const std::string& conditions,
                       const std::string& skeleton = "", int steps = 1, bool hdf5 = false) {
@@ -98,18 +93,6 @@ std::string box_scene(const std::string& mesh, const std::string& model, double 
     <Parameter name="Checkpoint every" type="int" value="0"/>
   </ParameterList>
 </ParameterList>)x";
-}
-
-double max_abs(const std::vector<double>& v) {
-  double m = 0.0;
-  for (double x : v) m = std::max(m, std::fabs(x));
-  return m;
-}
-double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  double m = 0.0;
-  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
-  return m / std::max(max_abs(a), 1e-300);
 }
 
 // A file of this rank's own (ranks run the same test side by side).
@@ -349,24 +332,7 @@ TEST(MeshScenes, GmshTwistIsTheSameOnThreadsAndRanks) {
     EXPECT_LT(d, 1e-8);
     if (world()->getRank() == 0) std::printf("[ info ] 2 ranks vs 1 rank: max |du| / max |u| = %.2e\n", d);
   }
-  const char* mode = std::getenv("SINEW_REFERENCE_MODE");
-  const char* file = std::getenv("SINEW_REFERENCE_FILE");
-  if (!mode || !file) return;
-  if (std::string(mode) == "write") {
-    if (world()->getRank() == 0) {
-      std::ofstream out(file);
-      out.precision(17);
-      for (double x : u) out << x << "\n";
-    }
-    return;
-  }
-  std::ifstream in(file);
-  ASSERT_TRUE(in.good()) << "reference " << file << " missing";
-  std::vector<double> ref;
-  for (double x; in >> x;) ref.push_back(x);
-  const double d = rel_diff(ref, u);
-  EXPECT_LT(d, 1e-8);
-  if (world()->getRank() == 0) std::printf("[ info ] against the 1-thread reference: max |du| / max |u| = %.2e\n", d);
+  agree_with_reference(u, world()->getRank(), 1e-8);
 }
 
 namespace {
@@ -808,7 +774,6 @@ TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
   if (world()->getRank() == 0) std::printf("[ info ] skin vertices vs the affine map: max error %.2e\n", err);
 
   // The bone region: the nodes inside core.obj, the same as testing every lattice node directly.
-  SceneConfig c = config(xml, dir + "_bone");
   RegionParameters bone;
   bone.region = "inside";
   bone.surface = mesh_path("core.obj");

@@ -1,5 +1,6 @@
 // End-to-end quasi-static runs of the shipped scenes at reduced size: convergence, the paper's physical
 // checks, agreement between backends and ranks, MueLu on two ranks, and the HDF5 output read back.
+#include "scene_test_utils.hpp"
 #include "tpetra_test_utils.hpp"
 
 #include <sinew/driver/run.hpp>
@@ -17,7 +18,7 @@
 #include <fstream>
 
 using namespace sinew;
-using sinew::test::gather;
+using namespace sinew::test;
 
 namespace {
 
@@ -42,19 +43,6 @@ RunResult run(Teuchos::RCP<Teuchos::ParameterList> p, Teuchos::RCP<const Teuchos
   Simulation sim(make_scene(p, "test scene"), RunOptions{true, ""}, comm);
   const int code = sim.run();
   return {code, gather(sim.displacement()), sim.records()};
-}
-
-double max_abs(const std::vector<double>& v) {
-  double m = 0.0;
-  for (double x : v) m = std::max(m, std::fabs(x));
-  return m;
-}
-
-double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  double m = 0.0;
-  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
-  return m;
 }
 
 std::string tag() { return "_np" + std::to_string(world()->getSize()) + "_t" + std::to_string(Kokkos::DefaultExecutionSpace::concurrency()); }
@@ -136,28 +124,12 @@ TEST(Scenes, StretchSnhPreservesVolumeWhereCorotationalLosesIt) {
 TEST(Scenes, ResultsAgreeAcrossBackendsAndRanks) {
   // One configuration writes the reference (CTest runs the 1-thread variant first); the OpenMP and
   // MPI variants compare against it. Relative agreement 1e-8.
-  const char* mode = std::getenv("SINEW_REFERENCE_MODE");
-  const char* file = std::getenv("SINEW_REFERENCE_FILE");
-  if (!mode || !file) GTEST_SKIP() << "SINEW_REFERENCE_MODE/FILE not set (CTest sets them)";
+  if (!reference_requested()) GTEST_SKIP() << "SINEW_REFERENCE_MODE/FILE not set (CTest sets them)";
   auto p = shipped("twist", {4, 4, 6}, "test_results/twist_ref" + tag());
   p->sublist("Solver").set("Absolute tolerance", 1e-9);
   const RunResult r = run(p);
   ASSERT_EQ(r.code, 0);
-  if (std::string(mode) == "write") {
-    if (world()->getRank() == 0) {
-      std::ofstream out(file);
-      out.precision(17);
-      for (double x : r.u) out << x << "\n";
-    }
-    return;
-  }
-  std::ifstream in(file);
-  ASSERT_TRUE(in.good()) << "reference " << file << " missing";
-  std::vector<double> ref;
-  for (double x; in >> x;) ref.push_back(x);
-  const double d = max_diff(ref, r.u) / max_abs(ref);
-  EXPECT_LT(d, 1e-8);
-  if (world()->getRank() == 0) std::printf("[ info ] max |u - u_ref| / max |u_ref| = %.2e\n", d);
+  agree_with_reference(r.u, world()->getRank(), 1e-8);
 }
 
 TEST(Scenes, MultigridOnTwoRanksConvergesLikeOneRank) {

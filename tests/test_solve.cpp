@@ -4,6 +4,7 @@
 // material point's answer for every model; checkpoints taken inside a cut step and on another number
 // of ranks restart the same run; corrupt checkpoints are named input errors.
 #include "material_test_utils.hpp"
+#include "scene_test_utils.hpp"
 #include "tpetra_test_utils.hpp"
 
 #include <sinew/core/xml_input.hpp>
@@ -21,7 +22,7 @@
 #include <regex>
 
 using namespace sinew;
-using sinew::test::gather;
+using namespace sinew::test;
 
 namespace {
 
@@ -69,12 +70,6 @@ std::string twist_xml(double angle, int steps, const std::string& element = "hex
 </ParameterList>)x";
 }
 
-SceneConfig config(const std::string& xml, const std::string& out) {
-  SceneConfig c = make_scene(read_parameter_text(xml, "test scene"), "test scene");
-  c.params.output.directory = out;
-  return c;
-}
-
 struct Result {
   int code;
   std::vector<double> u;
@@ -87,18 +82,6 @@ Result run(const SceneConfig& c, Teuchos::RCP<const Teuchos::Comm<int>> comm = T
   if (stop) sim.set_stop_check(stop);
   const int code = sim.run();
   return {code, gather(sim.displacement()), sim.records()};
-}
-
-double max_abs(const std::vector<double>& v) {
-  double m = 0.0;
-  for (double x : v) m = std::max(m, std::fabs(x));
-  return m;
-}
-double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  double m = 0.0;
-  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
-  return m / std::max(max_abs(a), 1e-300);
 }
 
 }  // namespace

@@ -122,17 +122,19 @@ BoundarySurface::BoundarySurface(const Mesh& mesh, const Teuchos::Comm<int>& com
 
   std::vector<char> on_surface(mesh.local_nodes(), 0);
   std::vector<GlobalId> tri_gids;  // faces this rank counts: 3 global ids per triangle
-  std::unordered_map<GlobalId, int> local_of;
-  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) local_of[mesh.node_gid[n]] = static_cast<int>(n);
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
     while (j < faces.size() && faces[j].key == faces[i].key) ++j;
     if (j - i == 1) {  // on one element only: the boundary
       const Face& F = faces[i];
-      for (int a = 0; a < nv; ++a) on_surface[corner(F.element, F.face, a)] = 1;
-      if (owned(local_of.at(F.key[0]))) {  // the owner of the lowest node writes it
-        GlobalId g[4];
-        for (int a = 0; a < nv; ++a) g[a] = mesh.node_gid[corner(F.element, F.face, a)];
+      GlobalId g[4];
+      int lowest = 0;  // the corner with the lowest global id: its owner writes the face
+      for (int a = 0; a < nv; ++a) {
+        on_surface[corner(F.element, F.face, a)] = 1;
+        g[a] = mesh.node_gid[corner(F.element, F.face, a)];
+        if (g[a] < g[lowest]) lowest = a;
+      }
+      if (owned(corner(F.element, F.face, lowest))) {
         tri_gids.insert(tri_gids.end(), {g[0], g[1], g[2]});
         if (hex) tri_gids.insert(tri_gids.end(), {g[0], g[2], g[3]});
       }

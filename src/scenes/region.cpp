@@ -14,9 +14,7 @@
 
 namespace sinew {
 
-namespace {
-
-double segment_distance(const std::array<double, 3>& X, const std::array<double, 3>& a, const std::array<double, 3>& b) {
+double segment_distance(const double* X, const std::array<double, 3>& a, const std::array<double, 3>& b) {
   double ab[3], ax[3], len2 = 0.0, t = 0.0;
   for (int k = 0; k < 3; ++k) {
     ab[k] = b[k] - a[k];
@@ -29,6 +27,8 @@ double segment_distance(const std::array<double, 3>& X, const std::array<double,
   for (int k = 0; k < 3; ++k) d2 += (ax[k] - t * ab[k]) * (ax[k] - t * ab[k]);
   return std::sqrt(d2);
 }
+
+namespace {
 
 std::function<bool(const std::array<double, 3>&)> predicate(const Mesh& mesh, const RegionParameters& p, const std::string& where) {
   const std::string& region = p.region;
@@ -60,7 +60,7 @@ std::function<bool(const std::array<double, 3>&)> predicate(const Mesh& mesh, co
   if (region == "segment") {
     const auto a = p.segment_start, b = p.segment_end;
     const double r = p.radius;
-    return [a, b, r](const std::array<double, 3>& X) { return segment_distance(X, a, b) <= r; };
+    return [a, b, r](const std::array<double, 3>& X) { return segment_distance(X.data(), a, b) <= r; };
   }
   if (region == "all") return [](const std::array<double, 3>&) { return true; };
   if (region == "inside") {  // every rank reads the (small) surface and tests its own nodes

@@ -57,21 +57,6 @@ Quat quat_of(const Mat3& R) {
   return q;
 }
 
-Mat3 matrix_of(const Quat& q) {
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  Mat3 R;
-  R(0, 0) = 1 - 2 * (y * y + z * z);
-  R(0, 1) = 2 * (x * y - z * w);
-  R(0, 2) = 2 * (x * z + y * w);
-  R(1, 0) = 2 * (x * y + z * w);
-  R(1, 1) = 1 - 2 * (x * x + z * z);
-  R(1, 2) = 2 * (y * z - x * w);
-  R(2, 0) = 2 * (x * z - y * w);
-  R(2, 1) = 2 * (y * z + x * w);
-  R(2, 2) = 1 - 2 * (x * x + y * y);
-  return R;
-}
-
 Mat3 slerp(const Mat3& A, const Mat3& B, double s) {
   Quat a = quat_of(A), b = quat_of(B);
   double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
@@ -88,21 +73,7 @@ Mat3 slerp(const Mat3& A, const Mat3& B, double s) {
   }
   const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   for (double& v : q) v /= n;
-  return matrix_of(q);
-}
-
-double segment_distance(const double* X, const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  double ab[3], ax[3], len2 = 0.0, t = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    ab[k] = b[k] - a[k];
-    ax[k] = X[k] - a[k];
-    len2 += ab[k] * ab[k];
-    t += ab[k] * ax[k];
-  }
-  t = len2 > 0.0 ? std::clamp(t / len2, 0.0, 1.0) : 0.0;
-  double d2 = 0.0;
-  for (int k = 0; k < 3; ++k) d2 += (ax[k] - t * ab[k]) * (ax[k] - t * ab[k]);
-  return std::sqrt(d2);
+  return rotation_of_quaternion(q[0], q[1], q[2], q[3]);
 }
 
 // The motion file: per bone name, its world transforms frame by frame.

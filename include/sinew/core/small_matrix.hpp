@@ -85,6 +85,21 @@ KOKKOS_INLINE_FUNCTION Mat3 cofactor(const Mat3& F) {
   return G;
 }
 
+// The rotation of a unit quaternion (w, x, y, z).
+KOKKOS_INLINE_FUNCTION Mat3 rotation_of_quaternion(double w, double x, double y, double z) {
+  Mat3 R;
+  R(0, 0) = 1 - 2 * (y * y + z * z);
+  R(0, 1) = 2 * (x * y - z * w);
+  R(0, 2) = 2 * (x * z + y * w);
+  R(1, 0) = 2 * (x * y + z * w);
+  R(1, 1) = 1 - 2 * (x * x + z * z);
+  R(1, 2) = 2 * (y * z - x * w);
+  R(2, 0) = 2 * (x * z - y * w);
+  R(2, 1) = 2 * (y * z + x * w);
+  R(2, 2) = 1 - 2 * (x * x + y * y);
+  return R;
+}
+
 // 9x9 matrix in the vec(F) basis, row-major (Hessians are symmetric, so the order rarely matters).
 struct Mat9 {
   double a[81];

@@ -215,22 +215,9 @@ struct CrsTarget {
   }
 };
 
-// The element loop over a list of local elements (those of one material), reducing the owned
-// elements' totals. Each element: gather, compute, fields, scatter.
-template <class Element, class Model, class Target>
-struct ElementLoop {
-  using memory_space = typename Target::memory_space;
+// The reduction both element loops share: totals over owned elements, min_J starting at +inf.
+struct TotalsReduction {
   using value_type = AssemblyTotals;
-  Model model;
-  Projection projection = Projection::Clamp;
-  ElementGeometry<memory_space> geometry;
-  Kokkos::View<const int*, memory_space> elements;  // local element ids to visit
-  Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
-  double body[3] = {0.0, 0.0, 0.0};                  // body force per reference volume
-  Target target;
-  bool want_force = false, want_matrix = false;
-  ElementFields<memory_space> fields;
-
   KOKKOS_INLINE_FUNCTION void init(value_type& t) const {
     t = AssemblyTotals();
     t.min_J = HUGE_VAL;
@@ -245,6 +232,23 @@ struct ElementLoop {
     a.undefined += b.undefined;
   }
 #endif
+};
+
+// The element loop over a list of local elements (those of one material), reducing the owned
+// elements' totals. Each element: gather, compute, fields, scatter.
+template <class Element, class Model, class Target>
+struct ElementLoop : TotalsReduction {
+  using memory_space = typename Target::memory_space;
+  Model model;
+  Projection projection = Projection::Clamp;
+  ElementGeometry<memory_space> geometry;
+  Kokkos::View<const int*, memory_space> elements;  // local element ids to visit
+  Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
+  double body[3] = {0.0, 0.0, 0.0};                  // body force per reference volume
+  Target target;
+  bool want_force = false, want_matrix = false;
+  ElementFields<memory_space> fields;
+
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, value_type& totals) const {
     constexpr int NDOF = 3 * Element::nodes;
@@ -271,9 +275,8 @@ struct ElementLoop {
 // hex8, 8x the atomic adds). Totals are the same sums in another order; per-element fields are not
 // offered (output uses ElementLoop).
 template <class Element, class Model, class Target>
-struct PointLoop {
+struct PointLoop : TotalsReduction {
   using memory_space = typename Target::memory_space;
-  using value_type = AssemblyTotals;
   Model model;
   Projection projection = Projection::Clamp;
   ElementGeometry<memory_space> geometry;
@@ -284,20 +287,6 @@ struct PointLoop {
   bool want_force = false, want_matrix = false;
 
   int work_items() const { return static_cast<int>(elements.extent(0)) * Element::points; }
-  KOKKOS_INLINE_FUNCTION void init(value_type& t) const {
-    t = AssemblyTotals();
-    t.min_J = HUGE_VAL;
-  }
-  KOKKOS_INLINE_FUNCTION void join(value_type& a, const value_type& b) const { a.add(b); }
-#if KOKKOS_VERSION < 40000
-  KOKKOS_INLINE_FUNCTION void join(volatile value_type& a, const volatile value_type& b) const {
-    a.energy += b.energy;
-    a.volume += b.volume;
-    a.min_J = b.min_J < a.min_J ? b.min_J : a.min_J;
-    a.inverted += b.inverted;
-    a.undefined += b.undefined;
-  }
-#endif
 
   KOKKOS_INLINE_FUNCTION void operator()(const int item, value_type& totals) const {
     constexpr int NPE = Element::nodes, NDOF = 3 * NPE;

@@ -80,6 +80,9 @@ struct RegionParameters {
   }
 };
 
+// The distance from X to the segment from a to b (segment regions; the skeleton's skinning weights).
+double segment_distance(const double* X, const std::array<double, 3>& a, const std::array<double, 3>& b);
+
 // The local nodes (owned and ghost) of a region, identical on every rank that holds a node. Collective.
 // Throws InputError naming `where` for a group the mesh does not have (listing those it has).
 std::vector<int> select_region(const Mesh& mesh, const Teuchos::Comm<int>& comm, const RegionParameters& r,

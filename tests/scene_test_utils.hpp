@@ -1,0 +1,70 @@
+// Helpers for tests that run whole scenes: differences between displacement vectors, a scene from XML
+// text, and the reference file that the 1-thread variant writes and the others compare against.
+#pragma once
+
+#include <sinew/core/xml_input.hpp>
+#include <sinew/driver/config.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace sinew::test {
+
+inline double max_abs(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+inline double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double m = 0.0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
+  return m;
+}
+
+// max |a - b| / max |a|
+inline double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  return max_diff(a, b) / std::max(max_abs(a), 1e-300);
+}
+
+// A scene from XML text, its output sent to `out`.
+inline SceneConfig config(const std::string& xml, const std::string& out) {
+  SceneConfig c = make_scene(read_parameter_text(xml, "test scene"), "test scene");
+  c.params.output.directory = out;
+  return c;
+}
+
+// Whether CTest asked this run to write or compare a reference (SINEW_REFERENCE_MODE/FILE).
+inline bool reference_requested() { return std::getenv("SINEW_REFERENCE_MODE") && std::getenv("SINEW_REFERENCE_FILE"); }
+
+// With SINEW_REFERENCE_MODE=write, rank 0 writes u (by global DOF) to SINEW_REFERENCE_FILE; with
+// "compare", u must equal the file's values to `tolerance` relative. Nothing without the variables.
+inline void agree_with_reference(const std::vector<double>& u, int rank, double tolerance) {
+  if (!reference_requested()) return;
+  const std::string mode = std::getenv("SINEW_REFERENCE_MODE"), file = std::getenv("SINEW_REFERENCE_FILE");
+  if (mode == "write") {
+    if (rank == 0) {
+      std::ofstream out(file);
+      out.precision(17);
+      for (double x : u) out << x << "\n";
+    }
+    return;
+  }
+  std::ifstream in(file);
+  ASSERT_TRUE(in.good()) << "reference " << file << " missing";
+  std::vector<double> ref;
+  for (double x; in >> x;) ref.push_back(x);
+  const double d = rel_diff(ref, u);
+  EXPECT_LT(d, tolerance);
+  if (rank == 0) std::printf("[ info ] against the 1-thread reference: max |u - u_ref| / max |u_ref| = %.2e\n", d);
+}
+
+}  // namespace sinew::test
