@@ -253,29 +253,48 @@ void ElasticSystem::eliminate_dirichlet(Vector* force, CrsMatrix* K) const {
   Kokkos::fence();
 }
 
-Teuchos::RCP<MultiVector> ElasticSystem::coordinates() const {
-  auto X = Teuchos::rcp(new MultiVector(owned_nodes_, 3));
-  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
-  auto v = X->getLocalViewHost(Tpetra::Access::OverwriteAll);
+namespace {
+// Host copy of the owned nodes' positions, X + u where u (owned DOFs) is given.
+Kokkos::View<double**, Kokkos::HostSpace> owned_positions(const Mesh& mesh, const Vector* u) {
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  Kokkos::View<double**, Kokkos::HostSpace> x("positions", mesh.n_owned_nodes, 3);
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) x(n, d) = Xh(n, d);
+  if (u) {
+    auto uh = u->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+      for (int d = 0; d < 3; ++d) x(n, d) += uh(3 * n + d, 0);
+  }
+  return x;
+}
+}  // namespace
+
+void ElasticSystem::fill_coordinates(MultiVector& X, const Vector* u) const {
+  const auto x = owned_positions(mesh_, u);
+  auto v = X.getLocalViewHost(Tpetra::Access::OverwriteAll);
   for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
-    for (int d = 0; d < 3; ++d) v(n, d) = Xh(n, d);
+    for (int d = 0; d < 3; ++d) v(n, d) = x(n, d);
+}
+
+Teuchos::RCP<MultiVector> ElasticSystem::coordinates(const Vector* u) const {
+  auto X = Teuchos::rcp(new MultiVector(owned_nodes_, 3));
+  fill_coordinates(*X, u);
   return X;
 }
 
-Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes() const {
-  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
+void ElasticSystem::fill_rigid_body_modes(MultiVector& modes, const Vector* u) const {
+  const auto xh = owned_positions(mesh_, u);
   double local[4] = {0, 0, 0, static_cast<double>(mesh_.n_owned_nodes)}, global[4];
   for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
-    for (int d = 0; d < 3; ++d) local[d] += Xh(n, d);
+    for (int d = 0; d < 3; ++d) local[d] += xh(n, d);
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 4, local, global);
   const double c[3] = {global[0] / global[3], global[1] / global[3], global[2] / global[3]};
-  auto modes = Teuchos::rcp(new MultiVector(owned_dofs_, 6));
-  auto v = modes->getLocalViewHost(Tpetra::Access::OverwriteAll);
+  auto v = modes.getLocalViewHost(Tpetra::Access::OverwriteAll);
   Kokkos::deep_copy(v, 0.0);
   for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n) {
-    const double x = Xh(n, 0) - c[0], y = Xh(n, 1) - c[1], z = Xh(n, 2) - c[2];
+    const double x = xh(n, 0) - c[0], y = xh(n, 1) - c[1], z = xh(n, 2) - c[2];
     for (int d = 0; d < 3; ++d) v(3 * n + d, d) = 1.0;  // translations
-    // rotations omega x (X - c) about x, y, z
+    // rotations omega x (x - c) about x, y, z
     v(3 * n + 1, 3) = -z;
     v(3 * n + 2, 3) = y;
     v(3 * n + 0, 4) = z;
@@ -283,6 +302,11 @@ Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes() const {
     v(3 * n + 0, 5) = -y;
     v(3 * n + 1, 5) = x;
   }
+}
+
+Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes(const Vector* u) const {
+  auto modes = Teuchos::rcp(new MultiVector(owned_dofs_, 6));
+  fill_rigid_body_modes(*modes, u);
   return modes;
 }
 

@@ -48,9 +48,10 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   scene_ = std::make_unique<Scene>(config_.scene(), comm_);
   solver_ = std::make_unique<NonlinearSolver>(scene_->system(), config_.params.solver);
   u_ = scene_->system().create_vector();
+  u_previous_ = scene_->system().create_vector();
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {
-    at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_);
+    at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get());
     restart_step = at_.step;
   }
   out_ = std::make_unique<Output>(config_.params.output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
@@ -96,9 +97,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   auto trial = scene.system().create_vector();
   while (at_.load < target - 1e-14) {
     const double t = std::min(at_.load + dt, target);
-    trial->assign(*u_);
-    scene.predict(at_.load, t, *trial);
-    scene.apply_load(t, *trial);
+    first_guess(t, *trial);
     if (talk_) {
       const double done = at_.load - start_load_, elapsed = wall_seconds() - started_;
       std::string eta;
@@ -119,6 +118,10 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
     rec.solve.final_residual = r.final_residual;
     if (r.converged()) {
+      if (scene.extrapolate()) {
+        u_previous_->assign(*u_);
+        at_.previous_load = at_.load;
+      }
       u_->assign(*trial);
       at_.load = t;
       at_.increment = t < target - 1e-14 ? dt : 0.0;
@@ -140,6 +143,24 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     at_.cuts = rec.cuts;
   }
   return StepOutcome::Done;
+}
+
+void Simulation::first_guess(double t, Vector& trial) {
+  Scene& scene = *scene_;
+  trial.assign(*u_);
+  scene.predict(at_.load, t, trial);
+  scene.apply_load(t, trial);
+  const double span = at_.load - at_.previous_load;
+  if (!scene.extrapolate() || at_.previous_load < 0.0 || span <= 1e-14) return;
+  // u_ + (t - load) / (load - previous) (u_ - u_previous): exact for a displacement linear in the load.
+  auto candidate = scene.system().create_vector();
+  candidate->update(1.0 + (t - at_.load) / span, *u_, -(t - at_.load) / span, *u_previous_, 0.0);
+  scene.apply_load(t, *candidate);
+  const ElasticSystem& sys = scene.system();
+  const EvaluationTotals plain = sys.evaluate(trial, nullptr, nullptr), extrapolated = sys.evaluate(*candidate, nullptr, nullptr);
+  if (extrapolated.undefined == 0 && std::isfinite(extrapolated.energy) &&
+      !(plain.undefined == 0 && std::isfinite(plain.energy) && plain.energy <= extrapolated.energy))
+    trial.assign(*candidate);
 }
 
 void Simulation::print_step(const StepRecord& rec) const {
@@ -191,23 +212,23 @@ int Simulation::run() {
     if (outcome == StepOutcome::Stopped) {
       // Interrupted inside step k: checkpoint exactly where the load path stands (possibly inside a cut
       // step), so that a restart continues the same run.
-      out.write_checkpoint(at_, u);
+      out.write_checkpoint(at_, u, u_previous_.get());
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d during step %d (load %.6g); checkpoint in %s\n", stop_signal_, k,
                      at_.load, out.checkpoint_file().c_str());
       return signal_exit_code(stop_signal_);
     }
-    at_ = LoadState{k, rec.load, 0.0, 0};
+    at_ = LoadState{k, rec.load, 0.0, 0, at_.previous_load};
     rec.totals = sys.evaluate(u, nullptr, nullptr);
     rec.volume_ratio = rec.totals.volume / V0;
     out.log(rec);
     records_.push_back(rec);
     if (k % out.every() == 0 || k == n) out.write_step(k, rec.load, u);
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
-    if (checkpoint_due) out.write_checkpoint(at_, u);
+    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get());
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
-      if (!checkpoint_due) out.write_checkpoint(at_, u);
+      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get());
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", stop_signal_, k,
                      out.checkpoint_file().c_str());

@@ -322,11 +322,16 @@ void Output::log(const StepRecord& r) {
   log_.flush();
 }
 
-void Output::write_checkpoint(const LoadState& at, const Vector& u) {
+void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous) {
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes);
-  auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
-  std::vector<double> disp(uv.data(), uv.data() + 3 * n_owned);
+  auto rows_of = [&](const Vector& v) {
+    auto vv = v.getLocalViewHost(Tpetra::Access::ReadOnly);
+    return std::vector<double>(vv.data(), vv.data() + 3 * n_owned);
+  };
+  const std::vector<double> disp = rows_of(u);
+  const bool with_previous = previous && at.previous_load >= 0.0;
+  const std::vector<double> prev = with_previous ? rows_of(*previous) : std::vector<double>();
   const std::vector<long long> gid(m.node_gid.begin(), m.node_gid.begin() + n_owned);
   // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one. Rows are
   // in output order with each node's global id beside them, so any number of ranks can read it.
@@ -337,12 +342,19 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u) {
     write_attribute(file, "load", at.load);
     write_attribute(file, "increment", at.increment);
     write_attribute(file, "cuts", at.cuts);
+    // The converged state before this one, which the extrapolating predictor needs for the next step.
+    if (with_previous) {
+      write_rows(file, "/previous_displacement", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned,
+                 prev.data(), tmp);
+      write_attribute(file, "previous_load", at.previous_load);
+    }
     write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
     write_attribute(file, "steps", steps_);
   });
 }
 
-LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& sys, int steps, Vector& u) {
+LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& sys, int steps, Vector& u,
+                                  Vector* previous) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());
   LoadState c;
@@ -385,13 +397,6 @@ LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& 
     c.cuts = H5Aexists(file.id(), "cuts") > 0 ? static_cast<int>(attribute("cuts", 0, 64)) : 0;
     if (c.load < static_cast<double>(c.step) / steps - 1e-12 || c.load > static_cast<double>(c.step + 1) / steps + 1e-12)
       fail("load " + std::to_string(c.load) + " does not lie within step " + std::to_string(c.step + 1) + " (corrupt file?)");
-    if (H5Lexists(file.id(), "/displacement", H5P_DEFAULT) <= 0) fail("has no /displacement dataset");
-    H5 dset(H5Dopen2(file.id(), "/displacement", H5P_DEFAULT), H5Dclose, path + ": /displacement");
-    H5 space(H5Dget_space(dset.id()), H5Sclose, "dataspace");
-    hsize_t dims[2] = {0, 0};
-    if (H5Sget_simple_extent_ndims(space.id()) != 2 || H5Sget_simple_extent_dims(space.id(), dims, nullptr) != 2 ||
-        dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
-      fail("/displacement does not have the shape nodes x 3 of this mesh");
     // Each rank reads a block of rows, whatever the layout that wrote them; the rows then go to the
     // ranks owning their nodes (a Tpetra import by global id).
     int rank = 0, P = 1;
@@ -412,10 +417,6 @@ LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& 
       }
       if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail(std::string("cannot read ") + name);
     };
-    std::vector<double> disp(3 * rows);
-    read_block("/displacement", H5T_NATIVE_DOUBLE, 3, disp.data());
-    for (double d : disp)
-      if (!std::isfinite(d)) fail("/displacement holds non-finite values (corrupt file?)");
     std::vector<long long> gid(rows);
     if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
       read_block("/node_gid", H5T_NATIVE_LLONG, 1, gid.data());
@@ -429,16 +430,39 @@ LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& 
       for (int c = 0; c < 3; ++c) dofs[3 * k + c] = 3 * gid[k] + c;
     const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
                                                 Teuchos::ArrayView<const GO>(dofs), 0, sys.comm()));
-    Vector block(block_map);
-    {
-      auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
-      for (long long i = 0; i < 3 * rows; ++i) bv(i, 0) = disp[i];
+    const Import import(block_map, u.getMap());
+    // One nodes x 3 dataset into a vector on u's map.
+    auto read_field = [&](const char* name, Vector& out) {
+      if (H5Lexists(file.id(), name, H5P_DEFAULT) <= 0) fail(std::string("has no ") + name + " dataset");
+      {
+        H5 d(H5Dopen2(file.id(), name, H5P_DEFAULT), H5Dclose, path + ": " + name);
+        H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+        hsize_t dims[2] = {0, 0};
+        if (H5Sget_simple_extent_ndims(sp.id()) != 2 || H5Sget_simple_extent_dims(sp.id(), dims, nullptr) != 2 ||
+            dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
+          fail(std::string(name) + " does not have the shape nodes x 3 of this mesh");
+      }
+      std::vector<double> values(3 * rows);
+      read_block(name, H5T_NATIVE_DOUBLE, 3, values.data());
+      for (double d : values)
+        if (!std::isfinite(d)) fail(std::string(name) + " holds non-finite values (corrupt file?)");
+      Vector block(block_map);
+      {
+        auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
+        for (long long i = 0; i < 3 * rows; ++i) bv(i, 0) = values[i];
+      }
+      out.putScalar(NAN);
+      out.doImport(block, import, Tpetra::INSERT);
+      auto ov = out.getLocalViewHost(Tpetra::Access::ReadOnly);
+      for (std::size_t i = 0; i < ov.extent(0); ++i)
+        if (!std::isfinite(ov(i, 0))) fail(std::string(name) + " does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
+    };
+    read_field("/displacement", u);
+    // Written by runs with the extrapolating predictor; without it the next step starts unextrapolated.
+    if (previous && H5Aexists(file.id(), "previous_load") > 0) {
+      c.previous_load = attribute("previous_load", 0.0, c.load);
+      read_field("/previous_displacement", *previous);
     }
-    u.putScalar(NAN);
-    u.doImport(block, Import(block_map, u.getMap()), Tpetra::INSERT);
-    auto uv = u.getLocalViewHost(Tpetra::Access::ReadOnly);
-    for (std::size_t i = 0; i < uv.extent(0); ++i)
-      if (!std::isfinite(uv(i, 0))) fail("does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
   });
   return c;
 }

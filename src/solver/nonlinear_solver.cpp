@@ -25,6 +25,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <cstdio>
 #include <cmath>
 
 namespace sinew {
@@ -360,6 +362,9 @@ struct NonlinearSolver::Impl {
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> lowsf;
   Teuchos::RCP<Thyra::LinearOpBase<double>> W;
   Teuchos::ParameterList nox;  // Sinew's defaults with the user's NOX list laid over them
+  // MueLu's inputs, held here so that they can be refilled in place: every MueLu setup from scratch
+  // (the first Newton iteration of each load step) reads them through the parameter list's references.
+  Teuchos::RCP<MultiVector> coordinates, nullspace;
   double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
   std::function<bool()> interrupt;
 
@@ -398,8 +403,10 @@ struct NonlinearSolver::Impl {
         mlist.sublist("coarse: params").set("relaxation: type", "Symmetric Gauss-Seidel");
         mlist.sublist("coarse: params").set("relaxation: sweeps", 2);
       }
-      mlist.set("Coordinates", s.coordinates());
-      mlist.set("Nullspace", s.rigid_body_modes());
+      coordinates = s.coordinates();
+      nullspace = s.rigid_body_modes();
+      mlist.set("Coordinates", coordinates);
+      mlist.set("Nullspace", nullspace);
     }
 
     model = Teuchos::rcp(new ElasticModel(s));
@@ -427,12 +434,24 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
   const Vector start(u, Teuchos::Copy);
   const HessianPolicy policy(impl_->params.exact_below);
   SolveReport first = solve_once(u, progress, policy);
-  if (first.converged() || first.status == SolveStatus::Interrupted || !first.exact_hessian_used) return first;
+  if (first.converged() || first.status == SolveStatus::Interrupted || !first.exact_hessian_used) {
+    if (first.converged()) converged_at(u);
+    return first;
+  }
   // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
   u.assign(start);
   SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
   second.accumulate(first);
+  if (second.converged()) converged_at(u);
   return second;
+}
+
+// The next load step's MueLu setup sees the modes of this converged state (not of the next step's
+// initial guess, whose boundary nodes have already jumped to their new positions).
+void NonlinearSolver::converged_at(const Vector& u) {
+  if (!impl_->nullspace || impl_->params.near_null_space != "current") return;
+  impl_->sys.fill_coordinates(*impl_->coordinates, &u);
+  impl_->sys.fill_rigid_body_modes(*impl_->nullspace, &u);
 }
 
 SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress,

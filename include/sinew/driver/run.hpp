@@ -45,6 +45,9 @@ class Simulation {
   void print_header() const;
   // Advances the state through load step k, cutting the increment when a solve fails.
   StepOutcome advance(int k, StepRecord& rec);
+  // The first guess for load t (Dirichlet values set): u_ moved by the skinning predictor, or its
+  // linear extrapolation through u_previous_ when that has the lower (finite) energy.
+  void first_guess(double t, Vector& trial);
   void print_step(const StepRecord& rec) const;
   void print_summary() const;
 
@@ -55,6 +58,7 @@ class Simulation {
   std::unique_ptr<NonlinearSolver> solver_;
   std::unique_ptr<Output> out_;
   Teuchos::RCP<Vector> u_;
+  Teuchos::RCP<Vector> u_previous_;  // the converged state before u_ (at at_.previous_load), for the predictor
   std::vector<StepRecord> records_;
   LoadState at_;  // where the run stands: the state in u_
   std::function<int()> stop_check_;

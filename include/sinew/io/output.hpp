@@ -65,6 +65,7 @@ struct LoadState {
   double load = 0.0;       // the load fraction of the displacement
   double increment = 0.0;  // the next increment to try (0: the rest of the next step)
   int cuts = 0;            // cuts made so far in the step under way
+  double previous_load = -1.0;  // load of the converged state before this one (< 0: none kept)
 };
 
 class Output {
@@ -95,11 +96,14 @@ class Output {
   int checkpoint_every() const { return params_.checkpoint_every; }
   std::string checkpoint_file() const { return dir_ + "/checkpoint.h5"; }
   // Collective: the displacement u at load state `at`.
-  void write_checkpoint(const LoadState& at, const Vector& u);
+  // previous: the converged state at at.previous_load, kept for the predictor (written when given and
+  // at.previous_load >= 0).
+  void write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous = nullptr);
 
   // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
   // Throws InputError (kind File) when the file is missing, unreadable, corrupt or from another scene.
-  static LoadState read_checkpoint(const std::string& path, const ElasticSystem& system, int steps, Vector& u);
+  static LoadState read_checkpoint(const std::string& path, const ElasticSystem& system, int steps, Vector& u,
+                                   Vector* previous = nullptr);
 
  private:
   void write_xdmf() const;

@@ -65,7 +65,9 @@ struct BoundaryConditionParameters {
 // The "Loading" section of a scene.
 struct LoadingParameters {
   enum class Initial { Rest, Scramble };
+  enum class Predictor { None, Extrapolate };
   int steps = 0, max_cuts = 0, scramble_seed = 0;
+  Predictor predictor = Predictor::Extrapolate;
   std::array<double, 3> body_force{};
   Initial initial = Initial::Rest;
   double scramble_scale = 0.0;
@@ -82,6 +84,10 @@ struct LoadingParameters {
     v.entry("Scramble scale", scramble_scale, 2.0, "scramble: the vertices fill a box of this many times the rest volume",
             Range::positive());
     v.entry("Scramble seed", scramble_seed, 1, "scramble: random seed");
+    v.choice("Predictor", predictor, Predictor::Extrapolate,
+             Choices<Predictor>{{"none", Predictor::None}, {"extrapolate", Predictor::Extrapolate}},
+             "each step's first guess: the previous state, or the linear extrapolation of the last two "
+             "converged states when its energy is lower");
     v.entry("Maximum cuts", max_cuts, 6,
             "a step that fails is retried with half the load increment, at most this many times", Range::closed(0, 30));
   }
@@ -115,6 +121,7 @@ class Scene {
   const std::vector<BoundaryCondition>& boundary_conditions() const { return bcs_; }
   int steps() const { return loading_.steps; }
   int max_cuts() const { return loading_.max_cuts; }
+  bool extrapolate() const { return loading_.predictor == LoadingParameters::Predictor::Extrapolate; }
   const std::string& name() const { return name_; }
 
   // Sets the Dirichlet entries of u (owned DOFs) and the body force for load fraction t.

@@ -24,6 +24,7 @@ struct SolverParameters {
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
   int max_iterations = 0;
   std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
+  std::string near_null_space;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
 
@@ -51,6 +52,10 @@ struct SolverParameters {
              "CG tolerance per Newton step: constant, or Eisenstat-Walker type 1 or 2");
     v.choice("Preconditioner", preconditioner, std::string("MueLu"),
              Choices<std::string>{{"muelu", "MueLu"}, {"none", "None"}}, "CG preconditioner");
+    v.choice("Near-null space", near_null_space, std::string("reference"),
+             Choices<std::string>{{"reference", "reference"}, {"current", "current"}},
+             "MueLu's rigid-body modes and coordinates: of the reference configuration, or of the "
+             "configuration at the start of each load step (the hierarchy is rebuilt per load step)");
     // Default 0.01, measured: 15^3 twist 19 + 32 -> 15 + 15 Newton iterations and 15.0 -> 7.9 s; 16x16x32
     // stretch 78.7 -> 28.7 s; same end states (the projection only changes the path, not the solution).
     v.entry("Exact Hessian below", exact_below, 0.01,
@@ -81,6 +86,7 @@ class NonlinearSolver {
   void set_interrupt(std::function<bool()> interrupt);
 
  private:
+  void converged_at(const Vector& u);
   SolveReport solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress, HessianPolicy policy);
   struct Impl;
   std::unique_ptr<Impl> impl_;
