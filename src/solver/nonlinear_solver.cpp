@@ -365,6 +365,26 @@ struct NonlinearSolver::Impl {
   // MueLu's inputs, held here so that they can be refilled in place: every MueLu setup from scratch
   // (the first Newton iteration of each load step) reads them through the parameter list's references.
   Teuchos::RCP<MultiVector> coordinates, nullspace;
+  // The Newton group, kept across load steps while its preconditioner hierarchy stays good: CG per Newton
+  // iteration within `rebuild_factor` of what it was in the first solve after the last rebuild.
+  Teuchos::RCP<NOX::Thyra::Group> group;
+  double cg_per_newton_after_rebuild = 0.0;
+
+  void after_solve(const SolveReport& r) {
+    if (params.rebuild == "every step" || !r.converged()) {
+      group = Teuchos::null;
+      cg_per_newton_after_rebuild = 0.0;
+      return;
+    }
+    if (r.newton_iterations == 0) return;
+    const double cg = static_cast<double>(r.linear_iterations) / r.newton_iterations;
+    if (cg_per_newton_after_rebuild == 0.0)
+      cg_per_newton_after_rebuild = cg;
+    else if (cg > params.rebuild_factor * cg_per_newton_after_rebuild) {
+      group = Teuchos::null;
+      cg_per_newton_after_rebuild = 0.0;
+    }
+  }
   double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
   std::function<bool()> interrupt;
 
@@ -436,6 +456,7 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
   SolveReport first = solve_once(u, progress, policy);
   if (first.converged() || first.status == SolveStatus::Interrupted || !first.exact_hessian_used) {
     if (first.converged()) converged_at(u);
+    impl_->after_solve(first);
     return first;
   }
   // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
@@ -443,6 +464,7 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
   SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
   second.accumulate(first);
   if (second.converged()) converged_at(u);
+  impl_->after_solve(second);
   return second;
 }
 
@@ -481,7 +503,13 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   }
 
   try {
-    auto group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
+    // A new group has a new linear solver, whose first preconditioner setup starts from scratch; a kept
+    // one reuses its MueLu hierarchy (MueLu's "reuse: type") from the last setup.
+    if (m.group.is_null())
+      m.group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
+    else
+      m.group->setX(x0);
+    auto group = m.group;
     group->computeF();
     report.initial_residual = group->getNormF();
     state.policy.start(report.initial_residual);

@@ -24,7 +24,8 @@ struct SolverParameters {
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
   int max_iterations = 0;
   std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
-  std::string near_null_space;
+  std::string near_null_space, rebuild;
+  double rebuild_factor = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
 
@@ -58,6 +59,13 @@ struct SolverParameters {
              "configuration at the start of each load step (the hierarchy is rebuilt per load step)");
     // Default 0.01, measured: 15^3 twist 19 + 32 -> 15 + 15 Newton iterations and 15.0 -> 7.9 s; 16x16x32
     // stretch 78.7 -> 28.7 s; same end states (the projection only changes the path, not the solution).
+    v.choice("Preconditioner rebuild", rebuild, std::string("when needed"),
+             Choices<std::string>{{"when needed", "when needed"}, {"every step", "every step"}},
+             "when MueLu's hierarchy is set up from scratch: at every load step, or only when a step's CG "
+             "iterations per Newton iteration grow past 'Rebuild factor' times those of the first step after "
+             "the last setup (and after a failed step); in between, each Newton iteration reuses the "
+             "prolongators (MueLu 'reuse: type')");
+    v.entry("Rebuild factor", rebuild_factor, 1.5, "see 'Preconditioner rebuild'", Range::closed(1.0, 1e6));
     v.entry("Exact Hessian below", exact_below, 0.01,
             "use the unprojected Hessian once |F| < this times the step's first |F| and nothing is inverted "
             "(0: always project); a solve that fails after using it is redone with projection",
