@@ -107,12 +107,22 @@ KOKKOS_INLINE_FUNCTION void add_stiffness_row(double* Krow, const double (*G)[3 
   for (int c = 0; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
 }
 
+// The point's stiffness into the upper triangle of K (columns c >= row): H is symmetric, so K is, and
+// half the contraction suffices; compute_element mirrors the triangle once per element.
 template <int NPE>
 KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9& H, const double dN[NPE][3], double w) {
   double G[9][3 * NPE];
   stiffness_factor<NPE>(G, H, dN);
   for (int a = 0; a < NPE; ++a)
-    for (int i = 0; i < 3; ++i) add_stiffness_row<NPE>(K[3 * a + i], G, dN[a], i, w);
+    for (int i = 0; i < 3; ++i) {
+      const int row = 3 * a + i;
+      const double w0 = w * dN[a][0], w1 = w * dN[a][1], w2 = w * dN[a][2];
+      const double* G0 = G[i];
+      const double* G1 = G[i + 3];
+      const double* G2 = G[i + 6];
+      double* Krow = K[row];
+      for (int c = row; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
+    }
 }
 
 // What one quadrature point of one element knows: its weight, shape functions and gradients, F, J and
@@ -183,6 +193,9 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
     if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.N, s.w, body);
     if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, projection), s.dN, s.w);
   }
+  if (want_matrix)
+    for (int a = 1; a < NDOF; ++a)
+      for (int c = 0; c < a; ++c) r.K[a][c] = r.K[c][a];
   r.psi_avg = psi_sum / w_sum;
   r.J_avg = J_sum / w_sum;
 }

@@ -101,19 +101,31 @@ struct SigmaEigensystem {
     }
   }
 
-  // sum_k filter(e_k) vec(Q_k) vec(Q_k)^T. With Projection::None this is the exact Hessian, and the
-  // scaling block is then used as is, without an eigen-decomposition.
+  // Whether the scaling block A is positive definite (its leading principal minors are positive), in
+  // which case every projection leaves it as it is.
+  KOKKOS_INLINE_FUNCTION bool scaling_block_definite() const {
+    const double m1 = A[0][0], m2 = A[0][0] * A[1][1] - A[0][1] * A[1][0];
+    const double m3 = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                      A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    return m1 > 0.0 && m2 > 0.0 && m3 > 0.0;
+  }
+
+  // sum_k filter(e_k) vec(Q_k) vec(Q_k)^T. The twist and flip eigenvalues are scalars; the scaling block
+  // is used as is (sum_ab A_ab vec(D_a) vec(D_b)^T, no eigen-decomposition) for the exact Hessian and
+  // whenever it is positive definite, which is the common case: the projection then only filters the
+  // six scalars, and the result is the same matrix as through the eigenpairs.
   KOKKOS_INLINE_FUNCTION Mat9 assemble(Projection p) const {
     Mat9 H = Mat9::zero();
-    if (p == Projection::None) {
+    if (p == Projection::None || scaling_block_definite()) {
       const Mat3 D[3] = {unit(0, 0), unit(1, 1), unit(2, 2)};
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) H.add_outer(A[a][b], D[a], D[b]);
       for (int k = 0; k < 3; ++k) {
         Mat3 T, L;
         pair_modes(k, T, L);
-        H.add_sym_outer(twist[k], T);
-        H.add_sym_outer(flip[k], L);
+        const double et = filter_eigenvalue(twist[k], p), el = filter_eigenvalue(flip[k], p);
+        if (et != 0.0) H.add_sym_outer(et, T);
+        if (el != 0.0) H.add_sym_outer(el, L);
       }
       return H;
     }
