@@ -8,7 +8,9 @@
 #include <Tpetra_Vector.hpp>
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <map>
+#include <optional>
 #include <memory>
 
 using namespace sinew;
@@ -47,8 +49,9 @@ Problem& problem(ElementType type, int n) {
 void assembly(benchmark::State& state, ElementType type, Backend backend) {
   const int n = static_cast<int>(state.range(0));
   Problem& p = problem(type, n);
+  // SINEW_BENCH_EXACT_HESSIAN=1: the unprojected Hessian, to see what the projection costs.
   std::optional<sinew::Projection> proj;
-  if (std::getenv("BENCH_EXACT")) proj = sinew::Projection::None;
+  if (std::getenv("SINEW_BENCH_EXACT_HESSIAN")) proj = sinew::Projection::None;
   for (auto _ : state) p.sys->evaluate(*p.u, p.f.get(), p.K.get(), backend, proj);
   const double elements = static_cast<double>(p.sys->mesh().global_elements);
   state.counters["elements_per_s"] = benchmark::Counter(elements * state.iterations(), benchmark::Counter::kIsRate);
