@@ -276,9 +276,9 @@ void ElasticSystem::fill_coordinates(MultiVector& X, const Vector* u) const {
     for (int d = 0; d < 3; ++d) v(n, d) = x(n, d);
 }
 
-Teuchos::RCP<MultiVector> ElasticSystem::coordinates(const Vector* u) const {
+Teuchos::RCP<MultiVector> ElasticSystem::coordinates() const {
   auto X = Teuchos::rcp(new MultiVector(owned_nodes_, 3));
-  fill_coordinates(*X, u);
+  fill_coordinates(*X, nullptr);
   return X;
 }
 
@@ -304,9 +304,9 @@ void ElasticSystem::fill_rigid_body_modes(MultiVector& modes, const Vector* u) c
   }
 }
 
-Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes(const Vector* u) const {
+Teuchos::RCP<MultiVector> ElasticSystem::rigid_body_modes() const {
   auto modes = Teuchos::rcp(new MultiVector(owned_dofs_, 6));
-  fill_rigid_body_modes(*modes, u);
+  fill_rigid_body_modes(*modes, nullptr);
   return modes;
 }
 

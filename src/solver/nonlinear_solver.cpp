@@ -25,8 +25,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
-#include <cstdio>
 #include <cmath>
 
 namespace sinew {
@@ -363,27 +361,34 @@ struct NonlinearSolver::Impl {
   Teuchos::RCP<Thyra::LinearOpBase<double>> W;
   Teuchos::ParameterList nox;  // Sinew's defaults with the user's NOX list laid over them
   // MueLu's inputs, held here so that they can be refilled in place: every MueLu setup from scratch
-  // (the first Newton iteration of each load step) reads them through the parameter list's references.
+  // reads them through the parameter list's references.
   Teuchos::RCP<MultiVector> coordinates, nullspace;
   // The Newton group, kept across load steps while its preconditioner hierarchy stays good: CG per Newton
-  // iteration within `rebuild_factor` of what it was in the first solve after the last rebuild.
+  // iteration within `rebuild_factor` of what it was in the first solve after the last setup. A new group
+  // has a new linear solver, whose first preconditioner setup starts from scratch.
   Teuchos::RCP<NOX::Thyra::Group> group;
   double cg_per_newton_after_rebuild = 0.0;
 
-  void after_solve(const SolveReport& r) {
-    if (params.rebuild == "every step" || !r.converged()) {
-      group = Teuchos::null;
-      cg_per_newton_after_rebuild = 0.0;
-      return;
+  void rebuild_next() {
+    group = Teuchos::null;
+    cg_per_newton_after_rebuild = 0.0;
+  }
+
+  // After a load step's solve ended in r with state u: the near-null space of a converged state (not of
+  // the next step's initial guess, whose boundary nodes have already jumped), and whether the next step
+  // keeps the hierarchy.
+  void after_solve(const SolveReport& r, const Vector& u) {
+    if (r.converged() && nullspace && params.near_null_space == "current") {
+      sys.fill_coordinates(*coordinates, &u);
+      sys.fill_rigid_body_modes(*nullspace, &u);
     }
+    if (params.rebuild == "every step" || !r.converged()) return rebuild_next();
     if (r.newton_iterations == 0) return;
     const double cg = static_cast<double>(r.linear_iterations) / r.newton_iterations;
     if (cg_per_newton_after_rebuild == 0.0)
       cg_per_newton_after_rebuild = cg;
-    else if (cg > params.rebuild_factor * cg_per_newton_after_rebuild) {
-      group = Teuchos::null;
-      cg_per_newton_after_rebuild = 0.0;
-    }
+    else if (cg > params.rebuild_factor * cg_per_newton_after_rebuild)
+      rebuild_next();
   }
   double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
   std::function<bool()> interrupt;
@@ -452,28 +457,16 @@ void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->in
 
 SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
   const Vector start(u, Teuchos::Copy);
-  const HessianPolicy policy(impl_->params.exact_below);
-  SolveReport first = solve_once(u, progress, policy);
-  if (first.converged() || first.status == SolveStatus::Interrupted || !first.exact_hessian_used) {
-    if (first.converged()) converged_at(u);
-    impl_->after_solve(first);
-    return first;
+  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below));
+  if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used) {
+    // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
+    u.assign(start);
+    SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
+    second.accumulate(report);
+    report = second;
   }
-  // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
-  u.assign(start);
-  SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
-  second.accumulate(first);
-  if (second.converged()) converged_at(u);
-  impl_->after_solve(second);
-  return second;
-}
-
-// The next load step's MueLu setup sees the modes of this converged state (not of the next step's
-// initial guess, whose boundary nodes have already jumped to their new positions).
-void NonlinearSolver::converged_at(const Vector& u) {
-  if (!impl_->nullspace || impl_->params.near_null_space != "current") return;
-  impl_->sys.fill_coordinates(*impl_->coordinates, &u);
-  impl_->sys.fill_rigid_body_modes(*impl_->nullspace, &u);
+  impl_->after_solve(report, u);
+  return report;
 }
 
 SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress,
@@ -503,8 +496,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   }
 
   try {
-    // A new group has a new linear solver, whose first preconditioner setup starts from scratch; a kept
-    // one reuses its MueLu hierarchy (MueLu's "reuse: type") from the last setup.
+    // A kept group reuses its MueLu hierarchy (MueLu's "reuse: type") from the last setup.
     if (m.group.is_null())
       m.group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
     else

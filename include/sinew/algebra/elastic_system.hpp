@@ -88,12 +88,12 @@ class ElasticSystem {
   void element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const;
 
   // Six rigid-body modes (3 translations, 3 rotations about the centroid) on the owned DOF map, and the
-  // node coordinates (3 columns) on the owned node map: MueLu's "Nullspace" and "Coordinates". Of the
-  // reference configuration, or of the current one x = X + u when u (owned DOFs) is given: the tangent
-  // stiffness at u annihilates infinitesimal rotations about x, not about X.
-  Teuchos::RCP<MultiVector> rigid_body_modes(const Vector* u = nullptr) const;
-  Teuchos::RCP<MultiVector> coordinates(const Vector* u = nullptr) const;
-  // The same, written into existing multivectors (MueLu holds them by reference).
+  // reference node coordinates (3 columns) on the owned node map: MueLu's "Nullspace" and "Coordinates".
+  Teuchos::RCP<MultiVector> rigid_body_modes() const;
+  Teuchos::RCP<MultiVector> coordinates() const;
+  // The same written into existing multivectors (MueLu holds them by reference), of the reference
+  // configuration or, when u (owned DOFs) is given, of the current one x = X + u: the tangent stiffness
+  // at u annihilates infinitesimal rotations about x, not about X.
   void fill_rigid_body_modes(MultiVector& modes, const Vector* u) const;
   void fill_coordinates(MultiVector& X, const Vector* u) const;
 

@@ -97,14 +97,16 @@ KOKKOS_INLINE_FUNCTION void stiffness_factor(double (*G)[3 * NPE], const Mat9& H
       }
 }
 
-// Row (a, i) of the point's stiffness: K_(ai)(c) = w (dN_a,0 G_(i)(c) + dN_a,1 G_(i+3)(c) + dN_a,2 G_(i+6)(c)).
+// Row (a, i) of the point's stiffness, columns c >= first: K_(ai)(c) = w (dN_a,0 G_(i)(c) + dN_a,1
+// G_(i+3)(c) + dN_a,2 G_(i+6)(c)).
 template <int NPE>
-KOKKOS_INLINE_FUNCTION void add_stiffness_row(double* Krow, const double (*G)[3 * NPE], const double dNa[3], int i, double w) {
+KOKKOS_INLINE_FUNCTION void add_stiffness_row(double* Krow, const double (*G)[3 * NPE], const double dNa[3], int i, double w,
+                                              int first = 0) {
   const double w0 = w * dNa[0], w1 = w * dNa[1], w2 = w * dNa[2];
   const double* G0 = G[i];
   const double* G1 = G[i + 3];
   const double* G2 = G[i + 6];
-  for (int c = 0; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
+  for (int c = first; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
 }
 
 // The point's stiffness into the upper triangle of K (columns c >= row): H is symmetric, so K is, and
@@ -114,15 +116,7 @@ KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9
   double G[9][3 * NPE];
   stiffness_factor<NPE>(G, H, dN);
   for (int a = 0; a < NPE; ++a)
-    for (int i = 0; i < 3; ++i) {
-      const int row = 3 * a + i;
-      const double w0 = w * dN[a][0], w1 = w * dN[a][1], w2 = w * dN[a][2];
-      const double* G0 = G[i];
-      const double* G1 = G[i + 3];
-      const double* G2 = G[i + 6];
-      double* Krow = K[row];
-      for (int c = row; c < 3 * NPE; ++c) Krow[c] += w0 * G0[c] + w1 * G1[c] + w2 * G2[c];
-    }
+    for (int i = 0; i < 3; ++i) add_stiffness_row<NPE>(K[3 * a + i], G, dN[a], i, w, 3 * a + i);
 }
 
 // What one quadrature point of one element knows: its weight, shape functions and gradients, F, J and
