@@ -1,7 +1,7 @@
 // Assembly throughput: elements per second for energy + force + projected stiffness on a lattice, on the
 // Serial backend and on the default one (OpenMP with OMP_NUM_THREADS threads) in the same run; plus the
 // matrix refill alone (resumeFill / zero / fillComplete) to separate Tpetra's overhead from the kernels.
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 
 #include <Tpetra_Core.hpp>
 #include <Tpetra_CrsMatrix.hpp>
@@ -18,7 +18,7 @@ using namespace sinew;
 namespace {
 
 struct Problem {
-  std::unique_ptr<ElasticSystem> sys;
+  std::unique_ptr<System> sys;
   Teuchos::RCP<Vector> u, f;
   Teuchos::RCP<CrsMatrix> K;
 };
@@ -38,7 +38,7 @@ Problem& problem(ElementType type, int n) {
   mat.mu_L = 1.0;
   mat.lambda_L = 24.5;
   Problem p;
-  p.sys = std::make_unique<ElasticSystem>(Tpetra::getDefaultComm(), build_mesh(ms, *Tpetra::getDefaultComm()), mat);
+  p.sys = std::make_unique<System>(Tpetra::getDefaultComm(), build_mesh(ms, *Tpetra::getDefaultComm()), mat);
   p.u = p.sys->create_vector();
   p.u->randomize(-0.01, 0.01);
   p.f = p.sys->create_vector();

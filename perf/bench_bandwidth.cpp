@@ -3,7 +3,7 @@
 //   cg_iteration: y = K p, two dot products and three vector updates on the assembled stiffness of a
 //   hex8 lattice, bytes = 12 per nonzero + 128 per row (values, column indices, and the vector traffic).
 // Prints one JSON object. Usage: bench_bandwidth [--cells N] [--reps R]
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 
 #include <Kokkos_Core.hpp>
 #include <Tpetra_Core.hpp>
@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   MaterialSpec mat;
   mat.mu_L = 1.0;
   mat.lambda_L = 24.5;
-  ElasticSystem sys(comm, build_mesh(ms, *comm), mat);
+  System sys(comm, build_mesh(ms, *comm), mat);
   auto u = sys.create_vector();
   u->putScalar(0.0);
   auto K = sys.create_matrix();

@@ -4,7 +4,7 @@
 set(header_core core/range.hpp)
 set(header_materials materials/model_list.hpp)
 set(header_discretization discretization/mesh.hpp)
-set(header_algebra algebra/elastic_system.hpp)
+set(header_algebra algebra/system.hpp)
 set(header_solver solver/hessian_policy.hpp)
 set(header_io io/output.hpp)
 set(header_scenes scenes/scene.hpp)

@@ -2,9 +2,10 @@
 // differences, rigid motions, volumes, Dirichlet elimination, and agreement between backends and ranks.
 // Runs as is on 1 rank (unit), with 2 OpenMP threads, and on 2 MPI ranks.
 #include "material_test_utils.hpp"
+#include "system_test_utils.hpp"
 #include "tpetra_test_utils.hpp"
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
 
@@ -18,7 +19,7 @@
 #include <map>
 
 using namespace sinew;
-using sinew::test::gather;
+using namespace sinew::test;
 
 namespace {
 
@@ -29,63 +30,6 @@ MaterialSpec material(MaterialModel m = MaterialModel::StableNeoHookean, double 
   MaterialSpec s = test::all_models(E, nu)[static_cast<std::size_t>(m)];
   s.projection = p;
   return s;
-}
-
-MeshSpec box(int n, ElementType t = ElementType::Hex8, int nz = -1) {
-  MeshSpec s;
-  s.element = t;
-  s.cells = {n, n, nz > 0 ? nz : n};
-  s.lower = {0.0, 0.0, 0.0};
-  s.upper = {1.0, 0.8, 1.2};
-  return s;
-}
-
-// Sets u from a function of the reference position and component, on owned DOFs.
-template <class Fn>
-void set_displacement(const ElasticSystem& sys, Vector& u, Fn&& fn) {
-  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
-  auto v = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
-  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n) {
-    const std::array<double, 3> x{X(n, 0), X(n, 1), X(n, 2)};
-    for (int c = 0; c < 3; ++c) v(3 * n + c, 0) = fn(x, c, sys.mesh().node_gid[n]);
-  }
-}
-
-// Deterministic pseudo-random number in [-1, 1] from a node id and component (same on every rank).
-double hash_unit(long long gid, int c, int salt = 0) { return 2.0 * unit_hash(gid, c, salt + 1) - 1.0; }
-
-// Dense copy of a distributed matrix on every rank (small test matrices only), via columns K e_j.
-std::vector<std::vector<double>> dense(const CrsMatrix& K) {
-  const std::size_t n = K.getGlobalNumRows();
-  std::vector<std::vector<double>> D(n, std::vector<double>(n));
-  Vector e(K.getDomainMap()), col(K.getRangeMap());
-  for (std::size_t j = 0; j < n; ++j) {
-    e.putScalar(0.0);
-    if (K.getDomainMap()->isNodeGlobalElement(static_cast<GO>(j))) e.replaceGlobalValue(static_cast<GO>(j), 1.0);
-    K.apply(e, col);
-    const auto c = gather(col);
-    for (std::size_t i = 0; i < n; ++i) D[i][j] = c[i];
-  }
-  return D;
-}
-
-double max_abs(const std::vector<std::vector<double>>& A) {
-  double m = 0.0;
-  for (const auto& r : A)
-    for (double x : r) m = std::max(m, std::fabs(x));
-  return m;
-}
-
-// Smallest eigenvalue of a dense symmetric matrix (LAPACK).
-double min_eigenvalue(const std::vector<std::vector<double>>& A) {
-  const int n = static_cast<int>(A.size());
-  std::vector<double> a(n * n), w(n), work(64 * n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) a[i + n * j] = 0.5 * (A[i][j] + A[j][i]);
-  int info = 0;
-  Teuchos::LAPACK<int, double>().SYEV('N', 'U', n, a.data(), n, w.data(), work.data(), 64 * n, &info);
-  EXPECT_EQ(info, 0);
-  return w[0];
 }
 
 }  // namespace
@@ -115,7 +59,7 @@ TEST(Mesh, VoxelCylinder) {
   s.lower = {-1, -1, 0};
   s.upper = {1, 1, 3};
   const Mesh m = build_mesh(s, *world());
-  ElasticSystem sys(world(), m, material());
+  System sys(world(), m, material());
   // The voxelized disk of 8x8 cells keeps the cells whose centres lie inside: 52 of 64.
   EXPECT_EQ(m.global_elements, 52 * 6);
   EXPECT_NEAR(sys.reference_volume(), 52 * (0.25 * 0.25 * 0.5) * 6, 1e-12);
@@ -129,7 +73,7 @@ TEST(Mesh, RejectsInvertedRestElement) {
     if (m.node_gid[n] == 0) Xh(n, 0) = 5.0;  // node 0 beyond its neighbour at x = 0.5
   Kokkos::deep_copy(m.X, Xh);
   try {
-    ElasticSystem sys(world(), m, material());
+    System sys(world(), m, material());
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("element 0 has a non-positive rest volume"), std::string::npos) << e.what();
@@ -139,7 +83,7 @@ TEST(Mesh, RejectsInvertedRestElement) {
 TEST(Assembly, RestStateHasZeroForceAndEnergy) {
   for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
     for (const auto& spec : test::all_models(1.0, 0.45)) {
-      ElasticSystem sys(world(), build_mesh(box(3, type), *world()), spec);
+      System sys(world(), build_mesh(box(3, type), *world()), spec);
       auto u = sys.create_vector();
       u->putScalar(0.0);
       auto f = sys.create_vector();
@@ -157,7 +101,7 @@ TEST(Assembly, RigidRotationHasZeroForce) {
   const Mat3 R = test::random_rotation(rng);
   for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
     for (const auto& spec : test::all_models(1.0, 0.45)) {
-      ElasticSystem sys(world(), build_mesh(box(3, type), *world()), spec);
+      System sys(world(), build_mesh(box(3, type), *world()), spec);
       auto u = sys.create_vector();
       set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) {
         return R(c, 0) * X[0] + R(c, 1) * X[1] + R(c, 2) * X[2] - X[c];
@@ -177,7 +121,7 @@ TEST(Assembly, AffineVolumeEqualsSumOfJ) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) Am(i, j) = A[i][j];
   for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
-    ElasticSystem sys(world(), build_mesh(box(3, type), *world()), material());
+    System sys(world(), build_mesh(box(3, type), *world()), material());
     auto u = sys.create_vector();
     set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) {
       return A[c][0] * X[0] + A[c][1] * X[1] + A[c][2] * X[2] - X[c];
@@ -194,7 +138,7 @@ TEST(Assembly, ForceIsGradientOfEnergy) {
       if (type == ElementType::Tet4 && spec0.model != MaterialModel::StableNeoHookean &&
           spec0.model != MaterialModel::Corotational)
         continue;
-      ElasticSystem sys(world(), build_mesh(box(2, type), *world()), spec0);
+      System sys(world(), build_mesh(box(2, type), *world()), spec0);
       auto u = sys.create_vector();
       set_displacement(sys, *u, [&](const std::array<double, 3>&, int c, long long g) { return 0.12 * hash_unit(g, c); });
       auto f = sys.create_vector();
@@ -226,7 +170,7 @@ TEST(Assembly, MatrixIsJacobianOfForceAndProjectionIsPsd) {
       if (type == ElementType::Tet4 && spec0.model != MaterialModel::StableNeoHookean) continue;
       MaterialSpec spec = spec0;
       spec.projection = Projection::None;
-      ElasticSystem sys(world(), build_mesh(box(2, type), *world()), spec);
+      System sys(world(), build_mesh(box(2, type), *world()), spec);
       auto u = sys.create_vector();
       set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long g) {
         return 0.1 * hash_unit(g, c) - (c == 2 ? 0.6 * X[2] : 0.0);  // distorted and strongly compressed
@@ -267,7 +211,7 @@ TEST(Assembly, MatrixIsJacobianOfForceAndProjectionIsPsd) {
 TEST(Assembly, ClampedEqualsExactWhereNothingIsClamped) {
   // At rest every element Hessian is PSD (its only zero eigenvalues are the rotations), so the
   // projection must change nothing.
-  ElasticSystem sys(world(), build_mesh(box(3), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45));
+  System sys(world(), build_mesh(box(3), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45));
   auto u = sys.create_vector();
   u->putScalar(0.0);
   auto K0 = sys.create_matrix(), K1 = sys.create_matrix();
@@ -281,7 +225,7 @@ TEST(Assembly, ClampedEqualsExactWhereNothingIsClamped) {
 }
 
 TEST(Assembly, RigidBodyModesSpanRestNullSpace) {
-  ElasticSystem sys(world(), build_mesh(box(3), *world()), material());
+  System sys(world(), build_mesh(box(3), *world()), material());
   auto u = sys.create_vector();
   u->putScalar(0.0);
   auto K = sys.create_matrix();
@@ -298,7 +242,7 @@ TEST(Assembly, RigidBodyModesSpanRestNullSpace) {
 }
 
 TEST(Assembly, DirichletEliminationIsSymmetric) {
-  ElasticSystem sys(world(), build_mesh(box(2), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp));
+  System sys(world(), build_mesh(box(2), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp));
   std::vector<int> fixed;
   for (int n : select_nodes(sys.mesh(), face_predicate(sys.mesh(), "z-")))
     for (int c = 0; c < 3; ++c) fixed.push_back(3 * n + c);
@@ -334,9 +278,9 @@ TEST(Assembly, BackendsAndRanksAgree) {
   for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
     const auto spec = material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp);
     auto self = Teuchos::rcp(new Teuchos::MpiComm<int>(MPI_COMM_SELF));
-    ElasticSystem dist(world(), build_mesh(box(4, type), *world()), spec);
-    ElasticSystem solo(self, build_mesh(box(4, type), *self), spec);
-    auto fill = [](const ElasticSystem& s, Vector& u) {
+    System dist(world(), build_mesh(box(4, type), *world()), spec);
+    System solo(self, build_mesh(box(4, type), *self), spec);
+    auto fill = [](const System& s, Vector& u) {
       set_displacement(s, u, [&](const std::array<double, 3>& X, int c, long long g) {
         return 0.08 * hash_unit(g, c, 1) + (c == 0 ? 0.3 * X[2] * X[1] : 0.0);
       });

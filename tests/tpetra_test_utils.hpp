@@ -1,7 +1,7 @@
 // Helpers for tests on distributed Tpetra objects.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 
 #include <Tpetra_Import.hpp>
 #include <Tpetra_Vector.hpp>

@@ -2,15 +2,15 @@
 // per element type so that the per-model instantiations compile in parallel.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/energy_term.hpp>
 #include <sinew/discretization/element_kernel.hpp>
+#include <sinew/materials/models.hpp>
 
 #include <Tpetra_CrsMatrix_decl.hpp>
 
 namespace sinew::detail {
 
-using MemorySpace = Kokkos::DefaultExecutionSpace::memory_space;
-using LocalMatrix = CrsMatrix::local_matrix_device_type;
+using MemorySpace = DeviceMemory;
 using Target = CrsTarget<LocalMatrix, Kokkos::View<double*, MemorySpace>>;
 
 // Everything one evaluation reads and writes, whatever the law.
@@ -20,7 +20,6 @@ struct AssemblyRequest {
   Target target;
   bool want_force = false, want_matrix = false;
   ElementFields<MemorySpace> fields;
-  double body[3] = {0.0, 0.0, 0.0};
 };
 
 // The element loop over `elements` (local ids, all of one law) on execution space Exec.
@@ -41,7 +40,6 @@ AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, con
     loop.geometry = r.geometry;
     loop.elements = elements;
     loop.u = r.u;
-    for (int i = 0; i < 3; ++i) loop.body[i] = r.body[i];
     loop.target = r.target;
     loop.want_force = r.want_force;
     loop.want_matrix = r.want_matrix;

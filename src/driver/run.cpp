@@ -71,7 +71,7 @@ Simulation::~Simulation() = default;
 void Simulation::set_stop_check(std::function<int()> check) { stop_check_ = std::move(check); }
 
 void Simulation::print_header() const {
-  const ElasticSystem& sys = scene_->system();
+  const System& sys = scene_->system();
   const std::size_t prescribed = sys.global_fixed_dofs();  // collective: outside the rank-0 block
   if (!talk_) return;
   std::printf("Sinew: scene '%s' (%s), %s, %d MPI rank%s\n", scene_->name().c_str(), config_.file.c_str(),
@@ -156,7 +156,7 @@ void Simulation::first_guess(double t, Vector& trial) {
   auto candidate = scene.system().create_vector();
   candidate->update(1.0 + (t - at_.load) / span, *u_, -(t - at_.load) / span, *u_previous_, 0.0);
   scene.apply_load(t, *candidate);
-  const ElasticSystem& sys = scene.system();
+  const System& sys = scene.system();
   const EvaluationTotals plain = sys.evaluate(trial, nullptr, nullptr), extrapolated = sys.evaluate(*candidate, nullptr, nullptr);
   if (extrapolated.undefined == 0 && std::isfinite(extrapolated.energy) &&
       !(plain.undefined == 0 && std::isfinite(plain.energy) && plain.energy <= extrapolated.energy))
@@ -186,7 +186,7 @@ void Simulation::print_summary() const {
 }
 
 int Simulation::run() {
-  ElasticSystem& sys = scene_->system();
+  System& sys = scene_->system();
   Scene& scene = *scene_;
   Output& out = *out_;
   Vector& u = *u_;

@@ -146,7 +146,7 @@ void write_file(const std::string& path, MPI_Comm comm, bool root, Fill&& fill) 
 
 }  // namespace
 
-Output::Output(const OutputParameters& params, const ElasticSystem& system, const std::string& name, int steps,
+Output::Output(const OutputParameters& params, const System& system, const std::string& name, int steps,
                int restart_step)
     : params_(params), sys_(system), name_(name), steps_(steps) {
   root_ = system.comm()->getRank() == 0;
@@ -353,7 +353,7 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
   });
 }
 
-LoadState Output::read_checkpoint(const std::string& path, const ElasticSystem& sys, int steps, Vector& u,
+LoadState Output::read_checkpoint(const std::string& path, const System& sys, int steps, Vector& u,
                                   Vector* previous) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());

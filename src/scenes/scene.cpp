@@ -58,7 +58,7 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
   try {
     MaterialAssignment materials{d.material.law.spec(), {}};
     for (const auto& [region, law] : d.material.regions) materials.regions.emplace_back(region, law.spec());
-    system_ = std::make_unique<ElasticSystem>(comm, build_scene_mesh(d.mesh, *comm), materials);
+    system_ = std::make_unique<System>(comm, build_scene_mesh(d.mesh, *comm), materials);
   } catch (const InputError& e) {
     throw e.prefixed(file);
   }

@@ -51,7 +51,7 @@ struct SolveState {
 // ---------------------------------------------------------------------------------------------
 class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
  public:
-  explicit ElasticModel(ElasticSystem& sys) : sys_(sys) {
+  explicit ElasticModel(System& sys) : sys_(sys) {
     space_ = Thyra::createVectorSpace<double, LO, GO, NodeType>(sys.owned_dofs());
     x0_ = Thyra::createMember(space_);
     Thyra::V_S(x0_.ptr(), 0.0);
@@ -114,7 +114,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     s.seconds_assembly += since(t0);
   }
 
-  ElasticSystem& sys_;
+  System& sys_;
   SolveState* state_ = nullptr;
   double energy_scale_ = 0.0;
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
@@ -354,7 +354,7 @@ void overlay(Teuchos::ParameterList& dst, const Teuchos::ParameterList& src) {
 }  // namespace
 
 struct NonlinearSolver::Impl {
-  ElasticSystem& sys;
+  System& sys;
   SolverParameters params;
   Teuchos::RCP<ElasticModel> model;
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> lowsf;
@@ -393,7 +393,7 @@ struct NonlinearSolver::Impl {
   double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
   std::function<bool()> interrupt;
 
-  Impl(ElasticSystem& s, const SolverParameters& p) : sys(s), params(p) {
+  Impl(System& s, const SolverParameters& p) : sys(s), params(p) {
     nox = default_nox(s.comm()->getRank());
     nox.sublist("Line Search").set("Method", p.line_search);
     nox.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
@@ -448,7 +448,7 @@ struct NonlinearSolver::Impl {
   }
 };
 
-NonlinearSolver::NonlinearSolver(ElasticSystem& system, const SolverParameters& params)
+NonlinearSolver::NonlinearSolver(System& system, const SolverParameters& params)
     : impl_(std::make_unique<Impl>(system, params)) {}
 NonlinearSolver::~NonlinearSolver() = default;
 

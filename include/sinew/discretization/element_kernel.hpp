@@ -72,15 +72,15 @@ KOKKOS_INLINE_FUNCTION void gather(const ElementGeometry<MemorySpace>& g, const 
 }
 
 // ---- compute: one quadrature point's contributions ----------------------------------------------
-// f_ai += w (P_iJ dN_a/dX_J - N_a b_i): internal force minus the body force (per reference volume).
+// f_ai += w P_iJ dN_a/dX_J: the internal force (external loads are a term of their own,
+// algebra/terms/external_force.hpp).
 template <int NPE>
-KOKKOS_INLINE_FUNCTION void add_point_force(double* f, const Mat3& P, const double dN[NPE][3], const double N[NPE],
-                                            double w, const double body[3]) {
+KOKKOS_INLINE_FUNCTION void add_point_force(double* f, const Mat3& P, const double dN[NPE][3], double w) {
   for (int a = 0; a < NPE; ++a)
     for (int i = 0; i < 3; ++i) {
       double s = 0.0;
       for (int J = 0; J < 3; ++J) s += P(i, J) * dN[a][J];
-      f[3 * a + i] += w * (s - N[a] * body[i]);
+      f[3 * a + i] += w * s;
     }
 }
 
@@ -119,21 +119,20 @@ KOKKOS_INLINE_FUNCTION void add_point_stiffness(double (*K)[3 * NPE], const Mat9
     for (int i = 0; i < 3; ++i) add_stiffness_row<NPE>(K[3 * a + i], G, dN[a], i, w, 3 * a + i);
 }
 
-// What one quadrature point of one element knows: its weight, shape functions and gradients, F, J and
-// the energy density (+inf where undefined, so that no merit function can accept such a state), and
-// the body force's work density.
+// What one quadrature point of one element knows: its weight, shape-function gradients, F, J and the
+// energy density (+inf where undefined, so that no merit function can accept such a state).
 template <class Element>
 struct PointState {
   static constexpr int NPE = Element::nodes;
-  double w = 0.0, J = 0.0, psi = 0.0, body_work = 0.0;
+  double w = 0.0, J = 0.0, psi = 0.0;
   bool defined = true;
-  double dN[NPE][3], N[NPE];
+  double dN[NPE][3];
   Mat3 F;
 };
 
 template <class Element, class Model, class MemorySpace>
 KOKKOS_INLINE_FUNCTION void evaluate_point(const Model& model, const ElementGeometry<MemorySpace>& g, int e, int q,
-                                           const double ue[3 * Element::nodes], const double body[3], PointState<Element>& s) {
+                                           const double ue[3 * Element::nodes], PointState<Element>& s) {
   constexpr int NPE = Element::nodes;
   const std::size_t p = static_cast<std::size_t>(e) * Element::points + q;
   s.w = g.wdetJ(p);
@@ -146,16 +145,12 @@ KOKKOS_INLINE_FUNCTION void evaluate_point(const Model& model, const ElementGeom
   s.J = det(s.F);
   s.defined = model.defined(s.F);
   s.psi = s.defined ? model.energy(s.F) : HUGE_VAL;
-  Element::values(q, s.N);
-  s.body_work = 0.0;
-  for (int a = 0; a < NPE; ++a)
-    for (int i = 0; i < 3; ++i) s.body_work += s.N[a] * body[i] * ue[3 * a + i];
 }
 
 // Adds one point to a totals record.
 template <class Element>
 KOKKOS_INLINE_FUNCTION void add_point_totals(AssemblyTotals& t, const PointState<Element>& s) {
-  t.energy += s.w * (s.psi - s.body_work);
+  t.energy += s.w * s.psi;
   t.volume += s.w * s.J;
   t.min_J = s.J < t.min_J ? s.J : t.min_J;
   if (!(s.J > 0.0)) ++t.inverted;
@@ -166,7 +161,7 @@ KOKKOS_INLINE_FUNCTION void add_point_totals(AssemblyTotals& t, const PointState
 template <class Element, class Model, class MemorySpace>
 KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection projection,
                                             const ElementGeometry<MemorySpace>& g, int e,
-                                            const double ue[3 * Element::nodes], const double body[3], bool want_force,
+                                            const double ue[3 * Element::nodes], bool want_force,
                                             bool want_matrix, ElementResult<Element>& r) {
   constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
   r.totals.energy = r.totals.volume = 0.0;
@@ -179,12 +174,12 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
   double psi_sum = 0.0, J_sum = 0.0, w_sum = 0.0;
   for (int q = 0; q < Element::points; ++q) {
     PointState<Element> s;
-    evaluate_point<Element>(model, g, e, q, ue, body, s);
+    evaluate_point<Element>(model, g, e, q, ue, s);
     add_point_totals(r.totals, s);
     psi_sum += s.w * s.psi;
     J_sum += s.w * s.J;
     w_sum += s.w;
-    if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.N, s.w, body);
+    if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.w);
     if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, projection), s.dN, s.w);
   }
   if (want_matrix)
@@ -251,7 +246,6 @@ struct ElementLoop : TotalsReduction {
   ElementGeometry<memory_space> geometry;
   Kokkos::View<const int*, memory_space> elements;  // local element ids to visit
   Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
-  double body[3] = {0.0, 0.0, 0.0};                  // body force per reference volume
   Target target;
   bool want_force = false, want_matrix = false;
   ElementFields<memory_space> fields;
@@ -264,7 +258,7 @@ struct ElementLoop : TotalsReduction {
     double ue[NDOF];
     gather<Element>(geometry, u, e, dof, ue);
     ElementResult<Element> r;
-    compute_element<Element>(model, projection, geometry, e, ue, body, want_force, want_matrix, r);
+    compute_element<Element>(model, projection, geometry, e, ue, want_force, want_matrix, r);
     if (e < geometry.n_owned) {
       totals.add(r.totals);
       if (fields.wanted()) {
@@ -289,7 +283,6 @@ struct PointLoop : TotalsReduction {
   ElementGeometry<memory_space> geometry;
   Kokkos::View<const int*, memory_space> elements;  // local element ids to visit
   Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
-  double body[3] = {0.0, 0.0, 0.0};
   Target target;
   bool want_force = false, want_matrix = false;
 
@@ -302,12 +295,12 @@ struct PointLoop : TotalsReduction {
     double ue[NDOF];
     gather<Element>(geometry, u, e, dof, ue);
     PointState<Element> s;
-    evaluate_point<Element>(model, geometry, e, q, ue, body, s);
+    evaluate_point<Element>(model, geometry, e, q, ue, s);
     if (e < geometry.n_owned) add_point_totals(totals, s);
     if (want_force) {
       double f[NDOF];
       for (int k = 0; k < NDOF; ++k) f[k] = 0.0;
-      add_point_force<NPE>(f, model.pk1(s.F), s.dN, s.N, s.w, body);
+      add_point_force<NPE>(f, model.pk1(s.F), s.dN, s.w);
       for (int k = 0; k < NDOF; ++k)
         if (dof[k] < target.owned_dofs) target.add_force(dof[k], f[k]);
     }

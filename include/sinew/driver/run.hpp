@@ -1,7 +1,7 @@
 // The quasi-static run: load steps with step cutting, progress lines, log, output and checkpoints.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 #include <sinew/driver/config.hpp>
 #include <sinew/io/output.hpp>
 

@@ -14,7 +14,7 @@
 //   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 #include <sinew/core/range.hpp>
 #include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
@@ -74,7 +74,7 @@ class Output {
   // restart_step >= 0 the run continues an earlier one in the same folder: the log keeps its rows up to
   // that step and the XDMF index its step files. Throws InputError (kind File) when the folder cannot
   // be created.
-  Output(const OutputParameters& params, const ElasticSystem& system, const std::string& name, int steps,
+  Output(const OutputParameters& params, const System& system, const std::string& name, int steps,
          int restart_step = -1);
 
   bool enabled() const { return params_.hdf5; }
@@ -102,14 +102,14 @@ class Output {
 
   // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
   // Throws InputError (kind File) when the file is missing, unreadable, corrupt or from another scene.
-  static LoadState read_checkpoint(const std::string& path, const ElasticSystem& system, int steps, Vector& u,
+  static LoadState read_checkpoint(const std::string& path, const System& system, int steps, Vector& u,
                                    Vector* previous = nullptr);
 
  private:
   void write_xdmf() const;
 
   OutputParameters params_;
-  const ElasticSystem& sys_;
+  const System& sys_;
   std::string dir_, name_;
   int steps_ = 1;
   bool root_ = false;

@@ -10,7 +10,7 @@
 // with the surface, not the volume.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 
 #include <map>
 #include <string>

@@ -72,7 +72,7 @@ struct OptionWriter {
 // One material law as a scene gives it.
 struct MaterialLaw {
   std::string model;
-  double young = 0.0, poisson = 0.0;
+  double young = 0.0, poisson = 0.0, density = 0.0;
   std::optional<double> lame_mu, lame_lambda;
   std::string projection;
   MaterialOptions options;
@@ -85,6 +85,9 @@ struct MaterialLaw {
     v.entry("Poisson ratio", poisson, 0.45, "Poisson's ratio nu", poisson_range());
     v.optional("Lame mu", lame_mu, "Lame shear modulus mu_L, instead of E and nu", Range::positive());
     v.optional("Lame lambda", lame_lambda, "Lame first parameter lambda_L, instead of E and nu (lambda_L > -2/3 mu_L)");
+    v.entry("Density", density, 1000.0,
+            "mass per reference volume (gravity, inertia); the default is soft tissue's, about water's in kg/m^3",
+            Range::positive());
     v.entry("Projection", projection, std::string("clamp"),
             "Hessian PSD projection: none, clamp (Smith et al. 2018, Sec. 4) or abs (Chen et al. 2024)");
 #define SINEW_MODEL_VISIT(M) std::get<static_cast<std::size_t>(model_of<M>()) + 1>(options).visit(v);
@@ -130,6 +133,7 @@ struct MaterialLaw {
     }
     s.options = options;
     s.projection = find_projection().value_or(Projection::Clamp);
+    s.density = density;
     return s;
   }
 

@@ -14,7 +14,7 @@
 // bones whose nodes follow them.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 #include <sinew/core/section.hpp>
 #include <sinew/materials/parameters.hpp>
 #include <sinew/scenes/region.hpp>
@@ -116,8 +116,8 @@ class Scene {
   // Collective; throws InputError naming the file and entry at fault.
   Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> comm);
 
-  ElasticSystem& system() { return *system_; }
-  const ElasticSystem& system() const { return *system_; }
+  System& system() { return *system_; }
+  const System& system() const { return *system_; }
   const std::vector<BoundaryCondition>& boundary_conditions() const { return bcs_; }
   int steps() const { return loading_.steps; }
   int max_cuts() const { return loading_.max_cuts; }
@@ -138,7 +138,7 @@ class Scene {
  private:
   std::string name_;
   LoadingParameters loading_;
-  std::unique_ptr<ElasticSystem> system_;
+  std::unique_ptr<System> system_;
   std::unique_ptr<Skeleton> skeleton_;
   std::vector<BoundaryCondition> bcs_;
   std::vector<char> free_;  // owned nodes with no prescribed component

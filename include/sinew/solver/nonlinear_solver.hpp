@@ -6,7 +6,7 @@
 // All of NOX, Thyra, Stratimikos, Belos and MueLu stay inside src/solver/nonlinear_solver.cpp.
 #pragma once
 
-#include <sinew/algebra/elastic_system.hpp>
+#include <sinew/algebra/system.hpp>
 #include <sinew/core/section.hpp>
 #include <sinew/solver/hessian_policy.hpp>
 #include <sinew/solver/solve_report.hpp>
@@ -79,7 +79,7 @@ struct SolverParameters {
 class NonlinearSolver {
  public:
   // Throws InputError when NOX, Belos or MueLu reject their parameters.
-  NonlinearSolver(ElasticSystem& system, const SolverParameters& params);
+  NonlinearSolver(System& system, const SolverParameters& params);
   ~NonlinearSolver();
 
   // Solves force(u) = 0 starting from u (its Dirichlet entries hold the prescribed values, which stay).

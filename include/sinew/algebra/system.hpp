@@ -1,0 +1,130 @@
+// The discrete system on Tpetra: DOF maps, the CRS graph (the mesh's element couplings, built once,
+// plus the couplings energy terms ask for), and the total energy E(u) = sum of its terms (energy_term.hpp)
+// with its gradient and PSD Hessian: the elastic energy of the mesh (terms/elastic.hpp), external
+// forces (terms/external_force.hpp) and whatever terms a scene adds (contact, inertia). After the
+// terms, the Dirichlet elimination (the system owns the essential DOFs, as MFEM's NonlinearForm does).
+// Also the rigid-body near-null space and coordinates MueLu needs.
+#pragma once
+
+#include <sinew/algebra/energy_term.hpp>
+#include <sinew/discretization/elements.hpp>
+#include <sinew/discretization/mesh.hpp>
+#include <sinew/materials/models.hpp>
+
+#include <memory>
+#include <optional>
+#include <set>
+
+namespace sinew {
+
+// Which law each element has: a default, and laws for named element groups (volume regions) of the mesh.
+struct MaterialAssignment {
+  MaterialSpec default_law;
+  std::vector<std::pair<std::string, MaterialSpec>> regions;
+};
+
+class ElasticTerm;
+class ExternalForceTerm;
+
+class System {
+ public:
+  // Throws InputError when a region of `materials` is not an element group of the mesh.
+  System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials);
+  System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialSpec& material)
+      : System(std::move(comm), std::move(mesh), MaterialAssignment{material, {}}) {}
+  ~System();
+
+  const Mesh& mesh() const { return mesh_; }
+  // The law of elements in no region (the only one for a mesh without regions).
+  const MaterialSpec& material() const;
+  // Largest (mu_L + |lambda_L|) over the laws in use: the stiffness scale of the energy's terms.
+  double stiffness_scale() const;
+  Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
+  Teuchos::RCP<const Map> owned_dofs() const { return owned_dofs_; }
+  Teuchos::RCP<const Map> overlap_dofs() const { return overlap_dofs_; }
+  // The overlap DOFs followed by the extra columns terms asked for (the graph's column map).
+  Teuchos::RCP<const Map> column_dofs() const { return column_dofs_; }
+  Teuchos::RCP<const Map> owned_nodes() const { return owned_nodes_; }
+  Teuchos::RCP<const CrsGraph> graph() const { return graph_; }
+  double reference_volume() const { return reference_volume_; }
+  // Per owned node: integral of its shape function over the mesh (the lumped volume), and the same
+  // weighted by the elements' densities (the lumped mass).
+  const std::vector<double>& nodal_volume() const { return nodal_volume_; }
+  const std::vector<double>& nodal_mass() const { return nodal_mass_; }
+  // Mean edge length of the owned elements over all ranks (a length scale for penalties and tolerances).
+  double cell_size() const { return cell_size_; }
+
+  // A matrix on the current graph. Matrices made before a pattern change (update_pattern) are stale.
+  Teuchos::RCP<CrsMatrix> create_matrix() const;
+  Teuchos::RCP<Vector> create_vector() const;
+
+  // Dirichlet DOFs, given as local overlap DOF indices (3 * local node + component). Every rank must
+  // mark its ghost DOFs too, which it can: selections are functions of the node's reference position.
+  void set_fixed_dofs(const std::vector<int>& overlap_dofs);
+  const std::vector<int>& fixed_owned_dofs() const { return fixed_owned_; }
+  std::size_t global_fixed_dofs() const;
+
+  // External loads (the external-force term): force per reference volume, and gravity (acceleration,
+  // times each element's density).
+  void set_body_force(const std::array<double, 3>& force_per_reference_volume);
+  void set_gravity(const std::array<double, 3>& acceleration);
+
+  // Terms beyond the elastic energy and the external forces (which every system has).
+  void add_term(std::shared_ptr<EnergyTerm> term);
+  // Collective: asks every term for its couplings and rebuilds the graph with them when some are
+  // missing (the pattern only grows). Returns true, on every rank, when it changed.
+  bool update_pattern();
+  // Counts pattern changes: a solver holding a matrix compares it with the value it was made at.
+  unsigned pattern_version() const { return pattern_version_; }
+
+  // Energy, gradient (force = dE/du, zero in Dirichlet rows) and Hessian (each elastic law projected as
+  // it says, or as `projection` says for all when given; the other terms' Hessians are PSD; Dirichlet
+  // rows and columns eliminated). force and K may be null. u holds total displacements (owned DOFs).
+  EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default,
+                            std::optional<Projection> projection = std::nullopt) const;
+
+  // Per owned element: volume-averaged energy density and J at u.
+  void element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const;
+
+  // Six rigid-body modes (3 translations, 3 rotations about the centroid) on the owned DOF map, and the
+  // reference node coordinates (3 columns) on the owned node map: MueLu's "Nullspace" and "Coordinates".
+  Teuchos::RCP<MultiVector> rigid_body_modes() const;
+  Teuchos::RCP<MultiVector> coordinates() const;
+  // The same written into existing multivectors (MueLu holds them by reference), of the reference
+  // configuration or, when u (owned DOFs) is given, of the current one x = X + u: the tangent stiffness
+  // at u annihilates infinitesimal rotations about x, not about X.
+  void fill_rigid_body_modes(MultiVector& modes, const Vector* u) const;
+  void fill_coordinates(MultiVector& X, const Vector* u) const;
+
+ private:
+  void build_graph();
+  void compute_nodal_weights();
+  EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
+                       ElementFields<DeviceMemory> fields) const;
+  // Rows and columns of Dirichlet DOFs: off-diagonal entries zeroed, the diagonal kept (the sum of the
+  // elements' own diagonal entries, a positive scale matching the stiffness, so CG sees a well-conditioned
+  // identity-like block there); their force entries zeroed.
+  void eliminate_dirichlet(Vector* force, CrsMatrix* K) const;
+  // The fixed flags of the extra columns (from their owners).
+  void refresh_fixed_columns();
+
+  Teuchos::RCP<const Teuchos::Comm<int>> comm_;
+  Mesh mesh_;
+  std::shared_ptr<ElasticTerm> elastic_;
+  std::shared_ptr<ExternalForceTerm> external_;
+  std::vector<std::shared_ptr<EnergyTerm>> terms_;  // every term, elastic first
+  ElementData elements_;
+  Teuchos::RCP<const Map> owned_dofs_, overlap_dofs_, column_dofs_, owned_nodes_;
+  Teuchos::RCP<const Import> column_importer_;
+  Teuchos::RCP<const CrsGraph> graph_;
+  Teuchos::RCP<Vector> u_columns_;
+  std::set<std::pair<GlobalId, GlobalId>> extra_;  // couplings beyond the mesh graph (owned row node, column node)
+  unsigned pattern_version_ = 0;
+  Kokkos::View<char*> fixed_;  // per column DOF
+  std::vector<int> fixed_owned_;
+  bool any_fixed_ = false;  // some local (owned or ghost) DOF is fixed
+  double reference_volume_ = 0.0, cell_size_ = 0.0;
+  std::vector<double> nodal_volume_, nodal_mass_;
+};
+
+}  // namespace sinew

@@ -1,0 +1,44 @@
+// The elastic energy of the mesh, E = sum over elements and quadrature points of w Psi(F) (Eq. 14 and
+// the models it is compared with), its gradient and its per-point projected Hessian (Sec. 4): the
+// element loop (discretization/element_kernel.hpp) run block by block, one block per material law, so
+// each law's kernel is its own instantiation with no per-element switch.
+#pragma once
+
+#include <sinew/algebra/energy_term.hpp>
+#include <sinew/discretization/elements.hpp>
+#include <sinew/materials/models.hpp>
+
+#include <string>
+#include <vector>
+
+namespace sinew {
+
+struct MaterialAssignment;
+
+class ElasticTerm final : public EnergyTerm {
+ public:
+  // Throws InputError when a region of `materials` is not an element group of the mesh. Holds
+  // references to mesh and elements, which must outlive it.
+  ElasticTerm(const Mesh& mesh, const ElementData& elements, const MaterialAssignment& materials);
+
+  const char* name() const override { return "elastic"; }
+  void add(const TermInput& in, TermOutput& out) const override;
+
+  // The law of elements in no region (blocks_[0], possibly with no elements).
+  const MaterialSpec& default_law() const { return blocks_.front().law; }
+  // Largest (mu_L + |lambda_L|) over the laws with elements.
+  double stiffness_scale() const;
+  // The density of each local element's law.
+  std::vector<double> element_density() const;
+
+ private:
+  struct Block {
+    MaterialSpec law;
+    Kokkos::View<int*> elements;  // local element ids
+  };
+  const Mesh& mesh_;
+  const ElementData& elements_;
+  std::vector<Block> blocks_;
+};
+
+}  // namespace sinew

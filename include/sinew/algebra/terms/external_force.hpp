@@ -1,0 +1,32 @@
+// The potential of external forces constant in space: a body force b per reference volume and gravity
+// g (an acceleration, times each element's density rho). Both are linear in u,
+//   E = - sum_a (V_a b + m_a g) . u_a,   V_a = int N_a dV,   m_a = int rho N_a dV,
+// the consistent nodal loads (exact for constant b and g, with the elements' own quadrature). The
+// Hessian is zero.
+#pragma once
+
+#include <sinew/algebra/energy_term.hpp>
+
+#include <array>
+#include <vector>
+
+namespace sinew {
+
+class ExternalForceTerm final : public EnergyTerm {
+ public:
+  // Lumped volume and mass of the owned nodes.
+  ExternalForceTerm(const std::vector<double>& nodal_volume, const std::vector<double>& nodal_mass);
+
+  const char* name() const override { return "external force"; }
+  void add(const TermInput& in, TermOutput& out) const override;
+
+  void set_body_force(const std::array<double, 3>& b) { body_ = b; }
+  void set_gravity(const std::array<double, 3>& g) { gravity_ = g; }
+  bool active() const;
+
+ private:
+  Kokkos::View<double*, DeviceMemory> volume_, mass_;
+  std::array<double, 3> body_{{0.0, 0.0, 0.0}}, gravity_{{0.0, 0.0, 0.0}};
+};
+
+}  // namespace sinew

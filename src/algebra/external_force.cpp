@@ -1,0 +1,47 @@
+// ExternalForceTerm (terms/external_force.hpp).
+#include <sinew/algebra/terms/external_force.hpp>
+
+namespace sinew {
+
+namespace {
+Kokkos::View<double*, DeviceMemory> device_copy(const std::vector<double>& v, const char* label) {
+  Kokkos::View<double*, DeviceMemory> d(std::string(label), v.size());
+  auto h = Kokkos::create_mirror_view(d);
+  for (std::size_t k = 0; k < v.size(); ++k) h(k) = v[k];
+  Kokkos::deep_copy(d, h);
+  return d;
+}
+}  // namespace
+
+ExternalForceTerm::ExternalForceTerm(const std::vector<double>& nodal_volume, const std::vector<double>& nodal_mass)
+    : volume_(device_copy(nodal_volume, "nodal volume")), mass_(device_copy(nodal_mass, "nodal mass")) {}
+
+bool ExternalForceTerm::active() const {
+  for (int i = 0; i < 3; ++i)
+    if (body_[i] != 0.0 || gravity_[i] != 0.0) return true;
+  return false;
+}
+
+void ExternalForceTerm::add(const TermInput& in, TermOutput& out) const {
+  if (!active()) return;
+  const auto V = volume_, m = mass_;
+  const auto u = in.u;
+  const auto f = out.force;
+  const bool want_force = in.want_force;
+  const double b0 = body_[0], b1 = body_[1], b2 = body_[2], g0 = gravity_[0], g1 = gravity_[1], g2 = gravity_[2];
+  double energy = 0.0;
+  Kokkos::parallel_reduce(
+      "sinew::external_force", Kokkos::RangePolicy<>(0, static_cast<int>(V.extent(0))),
+      KOKKOS_LAMBDA(const int n, double& e) {
+        const double load[3] = {V(n) * b0 + m(n) * g0, V(n) * b1 + m(n) * g1, V(n) * b2 + m(n) * g2};
+        for (int c = 0; c < 3; ++c) {
+          e -= load[c] * u(3 * n + c);
+          if (want_force) f(3 * n + c) -= load[c];
+        }
+      },
+      energy);
+  out.totals.external += energy;
+  out.totals.energy += energy;
+}
+
+}  // namespace sinew

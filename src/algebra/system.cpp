@@ -1,0 +1,394 @@
+// System: maps, the graph (element couplings plus the terms' extra couplings), the sum of the energy
+// terms, the Dirichlet elimination, the reductions, nodal weights and MueLu's rigid-body modes.
+#include <sinew/algebra/system.hpp>
+#include <sinew/algebra/terms/elastic.hpp>
+#include <sinew/algebra/terms/external_force.hpp>
+#include <sinew/core/errors.hpp>
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Tpetra_CrsGraph.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_MultiVector.hpp>
+#include <Tpetra_Vector.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace sinew {
+
+namespace {
+
+Teuchos::RCP<const Map> make_map(const std::vector<GO>& gids, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+  const Tpetra::global_size_t invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+  return Teuchos::rcp(new Map(invalid, Teuchos::ArrayView<const GO>(gids.data(), gids.size()), 0, comm));
+}
+
+std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t count) {
+  std::vector<GO> out(3 * count);
+  for (std::size_t n = 0; n < count; ++n)
+    for (int c = 0; c < 3; ++c) out[3 * n + c] = 3 * static_cast<GO>(node_gids[n]) + c;
+  return out;
+}
+
+}  // namespace
+
+System::System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials)
+    : comm_(std::move(comm)), mesh_(std::move(mesh)) {
+  elements_ = compute_element_data(mesh_, *comm_);
+  elastic_ = std::make_shared<ElasticTerm>(mesh_, elements_, materials);
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  std::vector<GO> owned_node_gids(mesh_.node_gid.begin(), mesh_.node_gid.begin() + n_owned);
+  owned_nodes_ = make_map(owned_node_gids, comm_);
+  owned_dofs_ = make_map(dof_gids(mesh_.node_gid, n_owned), comm_);
+  overlap_dofs_ = make_map(dof_gids(mesh_.node_gid, n_local), comm_);
+  fixed_ = Kokkos::View<char*>("fixed", 3 * n_local);
+  build_graph();
+  compute_nodal_weights();
+  external_ = std::make_shared<ExternalForceTerm>(nodal_volume_, nodal_mass_);
+  terms_ = {elastic_, external_};
+}
+
+System::~System() = default;
+
+const MaterialSpec& System::material() const { return elastic_->default_law(); }
+double System::stiffness_scale() const { return elastic_->stiffness_scale(); }
+
+void System::compute_nodal_weights() {
+  // V_a = sum_e sum_q w_q N_a(xi_q) over the elements around owned node a (all on this rank), the
+  // quadrature the element kernel uses; m_a the same weighted by the element's density.
+  const std::size_t n_owned = mesh_.n_owned_nodes;
+  nodal_volume_.assign(n_owned, 0.0);
+  nodal_mass_.assign(n_owned, 0.0);
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
+  auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), elements_.wdetJ);
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.X);
+  const std::vector<double> rho = elastic_->element_density();
+  const bool hex = mesh_.type == ElementType::Hex8;
+  const int npe = nodes_per_element(mesh_.type), nqp = elements_.nqp;
+  double local_volume = 0.0, edge_sum = 0.0;
+  long long edges = 0;
+  for (std::size_t e = 0; e < mesh_.local_elements(); ++e) {
+    for (int q = 0; q < nqp; ++q) {
+      double N[8];
+      if (hex)
+        Hex8::values(q, N);
+      else
+        Tet4::values(q, N);
+      const double wq = w(e * nqp + q);
+      if (e < mesh_.n_owned_elements) local_volume += wq;
+      for (int a = 0; a < npe; ++a) {
+        const int n = conn(e, a);
+        if (static_cast<std::size_t>(n) >= n_owned) continue;
+        nodal_volume_[n] += wq * N[a];
+        nodal_mass_[n] += rho[e] * wq * N[a];
+      }
+    }
+    if (e >= mesh_.n_owned_elements) continue;
+    // Edges from node 0 to the others that share an edge with it (hex: 1, 3, 4; tet: all).
+    for (int b : hex ? std::vector<int>{1, 3, 4} : std::vector<int>{1, 2, 3}) {
+      double d2 = 0.0;
+      for (int c = 0; c < 3; ++c) d2 += std::pow(Xh(conn(e, b), c) - Xh(conn(e, 0), c), 2);
+      edge_sum += std::sqrt(d2);
+      ++edges;
+    }
+  }
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local_volume, Teuchos::outArg(reference_volume_));
+  double gsum = 0.0;
+  long long gcount = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, edge_sum, Teuchos::outArg(gsum));
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, edges, Teuchos::outArg(gcount));
+  cell_size_ = gcount > 0 ? gsum / gcount : 0.0;
+}
+
+void System::build_graph() {
+  // Each owned node couples to every node of every element around it (all of which are on this rank,
+  // owned or ghost), and to the extra nodes terms asked for. The column map is the overlap map followed
+  // by the extra columns: local column index = overlap DOF index for mesh nodes, which is what the
+  // element kernels scatter with and what the Dirichlet elimination reads.
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
+  const int npe = nodes_per_element(mesh_.type);
+  std::unordered_map<GlobalId, int> local_of;
+  for (std::size_t n = 0; n < n_local; ++n) local_of[mesh_.node_gid[n]] = static_cast<int>(n);
+  // Extra column nodes that are not local mesh nodes get column slots after the overlap.
+  std::vector<GlobalId> extra_nodes;
+  for (const auto& [row, col] : extra_)
+    if (!local_of.count(col)) extra_nodes.push_back(col);
+  std::sort(extra_nodes.begin(), extra_nodes.end());
+  extra_nodes.erase(std::unique(extra_nodes.begin(), extra_nodes.end()), extra_nodes.end());
+  std::unordered_map<GlobalId, int> column_of(local_of);
+  for (std::size_t k = 0; k < extra_nodes.size(); ++k) column_of[extra_nodes[k]] = static_cast<int>(n_local + k);
+
+  std::vector<std::vector<int>> neighbours(n_owned);
+  for (std::size_t e = 0; e < mesh_.local_elements(); ++e)
+    for (int a = 0; a < npe; ++a) {
+      const int na = conn(e, a);
+      if (static_cast<std::size_t>(na) >= n_owned) continue;
+      for (int b = 0; b < npe; ++b) neighbours[na].push_back(conn(e, b));
+    }
+  for (const auto& [row, col] : extra_) {
+    const auto it = local_of.find(row);
+    if (it == local_of.end() || static_cast<std::size_t>(it->second) >= n_owned) continue;
+    neighbours[it->second].push_back(column_of.at(col));
+  }
+  std::vector<std::size_t> counts(3 * n_owned);
+  for (std::size_t n = 0; n < n_owned; ++n) {
+    auto& nb = neighbours[n];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    for (int c = 0; c < 3; ++c) counts[3 * n + c] = 3 * nb.size();
+  }
+  std::vector<GO> col_gids = dof_gids(mesh_.node_gid, n_local);
+  for (GlobalId g : extra_nodes)
+    for (int c = 0; c < 3; ++c) col_gids.push_back(3 * static_cast<GO>(g) + c);
+  column_dofs_ = extra_nodes.empty() ? overlap_dofs_ : make_map(col_gids, comm_);
+  auto graph = Teuchos::rcp(new CrsGraph(owned_dofs_, column_dofs_, Teuchos::ArrayView<const std::size_t>(counts)));
+  std::vector<LO> cols;
+  for (std::size_t n = 0; n < n_owned; ++n) {
+    cols.clear();
+    for (int m : neighbours[n])
+      for (int c = 0; c < 3; ++c) cols.push_back(3 * m + c);
+    for (int c = 0; c < 3; ++c) graph->insertLocalIndices(static_cast<LO>(3 * n + c), Teuchos::ArrayView<const LO>(cols));
+  }
+  graph->fillComplete(owned_dofs_, owned_dofs_);
+  graph_ = graph;
+  column_importer_ = Teuchos::rcp(new Import(owned_dofs_, column_dofs_));
+  u_columns_ = Teuchos::rcp(new Vector(column_dofs_));
+  if (fixed_.extent(0) != col_gids.size()) {
+    Kokkos::View<char*> grown("fixed", col_gids.size());
+    Kokkos::deep_copy(Kokkos::subview(grown, std::make_pair<std::size_t, std::size_t>(0, 3 * n_local)),
+                      Kokkos::subview(fixed_, std::make_pair<std::size_t, std::size_t>(0, 3 * n_local)));
+    fixed_ = grown;
+  }
+  refresh_fixed_columns();
+  ++pattern_version_;
+}
+
+void System::add_term(std::shared_ptr<EnergyTerm> term) {
+  term->columns_changed(*column_dofs_);
+  terms_.push_back(std::move(term));
+}
+
+bool System::update_pattern() {
+  std::vector<std::pair<GlobalId, GlobalId>> wanted;
+  for (const auto& t : terms_) t->couplings(wanted);
+  std::size_t before = extra_.size();
+  for (const auto& p : wanted) extra_.insert(p);
+  int grew = extra_.size() > before ? 1 : 0, any = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, grew, Teuchos::outArg(any));
+  if (!any) return false;
+  build_graph();
+  for (const auto& t : terms_) t->columns_changed(*column_dofs_);
+  return true;
+}
+
+Teuchos::RCP<CrsMatrix> System::create_matrix() const { return Teuchos::rcp(new CrsMatrix(graph_)); }
+Teuchos::RCP<Vector> System::create_vector() const { return Teuchos::rcp(new Vector(owned_dofs_)); }
+
+void System::set_fixed_dofs(const std::vector<int>& overlap_dofs) {
+  auto h = Kokkos::create_mirror_view(fixed_);
+  Kokkos::deep_copy(h, 0);
+  fixed_owned_.clear();
+  any_fixed_ = !overlap_dofs.empty();
+  const int n_owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
+  const std::size_t n_overlap = 3 * mesh_.local_nodes();
+  for (int d : overlap_dofs) {
+    if (d < 0 || static_cast<std::size_t>(d) >= n_overlap) throw std::out_of_range("set_fixed_dofs: bad DOF index");
+    h(d) = 1;
+  }
+  for (int d = 0; d < n_owned_dofs; ++d)
+    if (h(d)) fixed_owned_.push_back(d);
+  Kokkos::deep_copy(fixed_, h);
+  refresh_fixed_columns();
+}
+
+void System::refresh_fixed_columns() {
+  // Columns past the overlap belong to nodes of other ranks' meshes: ask their owners. Collective.
+  const std::size_t n_overlap = 3 * mesh_.local_nodes();
+  const std::size_t n_columns = column_dofs_->getNodeNumElements();
+  int extra = n_columns > n_overlap ? 1 : 0, any_extra = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, extra, Teuchos::outArg(any_extra));
+  if (!any_extra) return;
+  Vector owned(owned_dofs_), columns(column_dofs_);
+  {
+    auto v = owned.getLocalViewHost(Tpetra::Access::OverwriteAll);
+    for (std::size_t d = 0; d < v.extent(0); ++d) v(d, 0) = 0.0;
+    for (int d : fixed_owned_) v(d, 0) = 1.0;
+  }
+  columns.doImport(owned, *column_importer_, Tpetra::INSERT);
+  auto c = columns.getLocalViewHost(Tpetra::Access::ReadOnly);
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fixed_);
+  for (std::size_t d = n_overlap; d < n_columns; ++d) {
+    h(d) = c(d, 0) != 0.0 ? 1 : 0;
+    if (h(d)) any_fixed_ = true;
+  }
+  Kokkos::deep_copy(fixed_, h);
+}
+
+std::size_t System::global_fixed_dofs() const {
+  std::size_t local = fixed_owned_.size(), global = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(global));
+  return global;
+}
+
+void System::set_body_force(const std::array<double, 3>& f) { external_->set_body_force(f); }
+void System::set_gravity(const std::array<double, 3>& g) { external_->set_gravity(g); }
+
+EvaluationTotals System::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend,
+                                  std::optional<Projection> projection) const {
+  return run(u, force, K, backend, projection, {});
+}
+
+void System::element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const {
+  ElementFields<DeviceMemory> fields{Kokkos::View<double*>("elem_psi", mesh_.n_owned_elements),
+                                     Kokkos::View<double*>("elem_J", mesh_.n_owned_elements)};
+  run(u, nullptr, nullptr, Backend::Default, std::nullopt, fields);
+  auto ph = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fields.psi);
+  auto jh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fields.J);
+  psi.assign(ph.data(), ph.data() + ph.extent(0));
+  J.assign(jh.data(), jh.data() + jh.extent(0));
+}
+
+EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
+                             ElementFields<DeviceMemory> fields) const {
+  if (K && K->getCrsGraph().get() != graph_.get())
+    throw std::logic_error("System::evaluate: the matrix was made before the pattern changed (create_matrix again)");
+  u_columns_->doImport(u, *column_importer_, Tpetra::INSERT);
+  if (force) force->putScalar(0.0);
+  if (K) {
+    K->resumeFill();
+    K->setAllToScalar(0.0);
+  }
+  TermOutput out;
+  out.totals.min_J = HUGE_VAL;
+  {
+    TermInput in;
+    auto u_view = u_columns_->getLocalViewDevice(Tpetra::Access::ReadOnly);
+    in.u = Kokkos::subview(u_view, Kokkos::ALL(), 0);
+    in.want_force = force != nullptr;
+    in.want_matrix = K != nullptr;
+    in.backend = backend;
+    in.projection = projection;
+    Kokkos::View<double**, Kokkos::LayoutLeft, Vector::device_type> f_view;
+    if (force) {
+      f_view = force->getLocalViewDevice(Tpetra::Access::ReadWrite);
+      out.force = Kokkos::subview(f_view, Kokkos::ALL(), 0);
+    }
+    if (K) out.matrix = K->getLocalMatrixDevice();
+    out.owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
+    out.fields = fields;
+    for (const auto& term : terms_) term->add(in, out);
+    Kokkos::fence();
+  }
+  eliminate_dirichlet(force, K);
+  if (K) K->fillComplete(owned_dofs_, owned_dofs_);
+
+  const EvaluationTotals& t = out.totals;
+  EvaluationTotals g;
+  const double sums[7] = {t.energy, t.elastic, t.external, t.inertia, t.contact, t.volume, 0.0};
+  double gsums[7];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 7, sums, gsums);
+  g.energy = gsums[0];
+  g.elastic = gsums[1];
+  g.external = gsums[2];
+  g.inertia = gsums[3];
+  g.contact = gsums[4];
+  g.volume = gsums[5];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, t.min_J, Teuchos::outArg(g.min_J));
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, t.penetration, Teuchos::outArg(g.penetration));
+  const long long counts[3] = {t.inverted, t.undefined, t.contacts};
+  long long gcounts[3];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 3, counts, gcounts);
+  g.inverted = gcounts[0];
+  g.undefined = gcounts[1];
+  g.contacts = gcounts[2];
+  return g;
+}
+
+void System::eliminate_dirichlet(Vector* force, CrsMatrix* K) const {
+  // Ghost DOFs count too: a rank with no fixed row may still have fixed columns.
+  if (!any_fixed_) return;
+  const auto fixed = fixed_;
+  const int rows = static_cast<int>(3 * mesh_.n_owned_nodes);
+  if (force) {
+    auto f = force->getLocalViewDevice(Tpetra::Access::ReadWrite);
+    Kokkos::parallel_for(
+        "sinew::dirichlet_force", Kokkos::RangePolicy<>(0, rows), KOKKOS_LAMBDA(const int r) {
+          if (fixed(r)) f(r, 0) = 0.0;
+        });
+  }
+  if (K) {
+    const auto A = K->getLocalMatrixDevice();
+    // Local column indices are column-map indices (overlap DOFs first), which fixed_ covers.
+    Kokkos::parallel_for(
+        "sinew::dirichlet_matrix", Kokkos::RangePolicy<>(0, rows), KOKKOS_LAMBDA(const int r) {
+          const bool row_fixed = fixed(r) != 0;
+          for (auto k = A.graph.row_map(r); k < A.graph.row_map(r + 1); ++k) {
+            const int c = A.graph.entries(k);
+            if ((row_fixed || fixed(c)) && c != r) A.values(k) = 0.0;
+          }
+        });
+  }
+  Kokkos::fence();
+}
+
+namespace {
+// Host copy of the owned nodes' positions, X + u where u (owned DOFs) is given.
+Kokkos::View<double**, Kokkos::HostSpace> owned_positions(const Mesh& mesh, const Vector* u) {
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  Kokkos::View<double**, Kokkos::HostSpace> x("positions", mesh.n_owned_nodes, 3);
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) x(n, d) = Xh(n, d);
+  if (u) {
+    auto uh = u->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+      for (int d = 0; d < 3; ++d) x(n, d) += uh(3 * n + d, 0);
+  }
+  return x;
+}
+}  // namespace
+
+void System::fill_coordinates(MultiVector& X, const Vector* u) const {
+  const auto x = owned_positions(mesh_, u);
+  auto v = X.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) v(n, d) = x(n, d);
+}
+
+Teuchos::RCP<MultiVector> System::coordinates() const {
+  auto X = Teuchos::rcp(new MultiVector(owned_nodes_, 3));
+  fill_coordinates(*X, nullptr);
+  return X;
+}
+
+void System::fill_rigid_body_modes(MultiVector& modes, const Vector* u) const {
+  const auto xh = owned_positions(mesh_, u);
+  double local[4] = {0, 0, 0, static_cast<double>(mesh_.n_owned_nodes)}, global[4];
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) local[d] += xh(n, d);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 4, local, global);
+  const double c[3] = {global[0] / global[3], global[1] / global[3], global[2] / global[3]};
+  auto v = modes.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  Kokkos::deep_copy(v, 0.0);
+  for (std::size_t n = 0; n < mesh_.n_owned_nodes; ++n) {
+    const double x = xh(n, 0) - c[0], y = xh(n, 1) - c[1], z = xh(n, 2) - c[2];
+    for (int d = 0; d < 3; ++d) v(3 * n + d, d) = 1.0;  // translations
+    // rotations omega x (x - c) about x, y, z
+    v(3 * n + 1, 3) = -z;
+    v(3 * n + 2, 3) = y;
+    v(3 * n + 0, 4) = z;
+    v(3 * n + 2, 4) = -x;
+    v(3 * n + 0, 5) = -y;
+    v(3 * n + 1, 5) = x;
+  }
+}
+
+Teuchos::RCP<MultiVector> System::rigid_body_modes() const {
+  auto modes = Teuchos::rcp(new MultiVector(owned_dofs_, 6));
+  fill_rigid_body_modes(*modes, nullptr);
+  return modes;
+}
+
+}  // namespace sinew

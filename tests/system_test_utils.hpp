@@ -1,0 +1,76 @@
+// Helpers for tests on a System: lattice boxes, displacement fields, dense copies of small distributed
+// matrices and their smallest eigenvalue (LAPACK).
+#pragma once
+
+#include "tpetra_test_utils.hpp"
+
+#include <sinew/algebra/system.hpp>
+#include <sinew/core/hash.hpp>
+
+#include <Teuchos_LAPACK.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+namespace sinew::test {
+
+inline MeshSpec box(int n, ElementType t = ElementType::Hex8, int nz = -1) {
+  MeshSpec s;
+  s.element = t;
+  s.cells = {n, n, nz > 0 ? nz : n};
+  s.lower = {0.0, 0.0, 0.0};
+  s.upper = {1.0, 0.8, 1.2};
+  return s;
+}
+
+// Sets u from a function of the reference position and component, on owned DOFs.
+template <class Fn>
+inline void set_displacement(const System& sys, Vector& u, Fn&& fn) {
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  auto v = u.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n) {
+    const std::array<double, 3> x{X(n, 0), X(n, 1), X(n, 2)};
+    for (int c = 0; c < 3; ++c) v(3 * n + c, 0) = fn(x, c, sys.mesh().node_gid[n]);
+  }
+}
+
+// Deterministic pseudo-random number in [-1, 1] from a node id and component (same on every rank).
+inline double hash_unit(long long gid, int c, int salt = 0) { return 2.0 * unit_hash(gid, c, salt + 1) - 1.0; }
+
+// Dense copy of a distributed matrix on every rank (small test matrices only), via columns K e_j.
+inline std::vector<std::vector<double>> dense(const CrsMatrix& K) {
+  const std::size_t n = K.getGlobalNumRows();
+  std::vector<std::vector<double>> D(n, std::vector<double>(n));
+  Vector e(K.getDomainMap()), col(K.getRangeMap());
+  for (std::size_t j = 0; j < n; ++j) {
+    e.putScalar(0.0);
+    if (K.getDomainMap()->isNodeGlobalElement(static_cast<GO>(j))) e.replaceGlobalValue(static_cast<GO>(j), 1.0);
+    K.apply(e, col);
+    const auto c = gather(col);
+    for (std::size_t i = 0; i < n; ++i) D[i][j] = c[i];
+  }
+  return D;
+}
+
+inline double max_abs(const std::vector<std::vector<double>>& A) {
+  double m = 0.0;
+  for (const auto& r : A)
+    for (double x : r) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+// Smallest eigenvalue of a dense symmetric matrix (LAPACK).
+inline double min_eigenvalue(const std::vector<std::vector<double>>& A) {
+  const int n = static_cast<int>(A.size());
+  std::vector<double> a(n * n), w(n), work(64 * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) a[i + n * j] = 0.5 * (A[i][j] + A[j][i]);
+  int info = 0;
+  Teuchos::LAPACK<int, double>().SYEV('N', 'U', n, a.data(), n, w.data(), work.data(), 64 * n, &info);
+  EXPECT_EQ(info, 0);
+  return w[0];
+}
+
+}  // namespace sinew::test
