@@ -143,7 +143,8 @@ void System::build_graph() {
   std::vector<GO> col_gids = dof_gids(mesh_.node_gid, n_local);
   for (GlobalId g : extra_nodes)
     for (int c = 0; c < 3; ++c) col_gids.push_back(3 * static_cast<GO>(g) + c);
-  column_dofs_ = extra_nodes.empty() ? overlap_dofs_ : make_map(col_gids, comm_);
+  // Map construction is collective: every rank makes one, with extras or without.
+  column_dofs_ = pattern_version_ == 0 ? overlap_dofs_ : make_map(col_gids, comm_);
   auto graph = Teuchos::rcp(new CrsGraph(owned_dofs_, column_dofs_, Teuchos::ArrayView<const std::size_t>(counts)));
   std::vector<LO> cols;
   for (std::size_t n = 0; n < n_owned; ++n) {
@@ -251,8 +252,12 @@ void System::element_fields(const Vector& u, std::vector<double>& psi, std::vect
   J.assign(jh.data(), jh.data() + jh.extent(0));
 }
 
+void System::gradient(const Vector& u, Vector& force, const EnergyTerm* only) const {
+  run(u, &force, nullptr, Backend::Default, std::nullopt, {}, only, false);
+}
+
 EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
-                             ElementFields<DeviceMemory> fields) const {
+                             ElementFields<DeviceMemory> fields, const EnergyTerm* only, bool eliminate) const {
   if (K && K->getCrsGraph().get() != graph_.get())
     throw std::logic_error("System::evaluate: the matrix was made before the pattern changed (create_matrix again)");
   u_columns_->doImport(u, *column_importer_, Tpetra::INSERT);
@@ -279,10 +284,11 @@ EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backe
     if (K) out.matrix = K->getLocalMatrixDevice();
     out.owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
     out.fields = fields;
-    for (const auto& term : terms_) term->add(in, out);
+    for (const auto& term : terms_)
+      if (!only || term.get() == only) term->add(in, out);
     Kokkos::fence();
   }
-  eliminate_dirichlet(force, K);
+  if (eliminate) eliminate_dirichlet(force, K);
   if (K) K->fillComplete(owned_dofs_, owned_dofs_);
 
   const EvaluationTotals& t = out.totals;

@@ -35,6 +35,7 @@ SceneConfig read_scene(const std::string& path) {
   resolve(c.params.skeleton.motion_file);
   for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
   for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
+  for (auto& [name, collider] : c.params.contact.colliders) resolve(collider.surface);
   return c;
 }
 
@@ -53,6 +54,19 @@ void check_mesh_file(const SceneConfig& c) {
     };
     for (const auto& [name, bc] : p.loading.conditions) surface(bc.region, "Loading/Boundary conditions/" + name);
     for (const auto& [name, bone] : p.skeleton.bones) surface(bone.region, "Skeleton/Bones/" + name);
+    for (const auto& [name, collider] : p.contact.colliders) {
+      if (collider.shape != ColliderParameters::Shape::Mesh) continue;
+      try {
+        read_triangle_surface(collider.surface);
+      } catch (const InputError& e) {
+        throw e.prefixed("Contact/Colliders/" + name + ": ");
+      }
+    }
+    // A collider attached to a bone needs that bone.
+    for (const auto& [name, collider] : p.contact.colliders)
+      if (!collider.bone.empty() && std::none_of(p.skeleton.bones.begin(), p.skeleton.bones.end(),
+                                                 [&](const auto& b) { return b.first == collider.bone; }))
+        throw InputError("Contact/Colliders/" + name + ": 'Bone' \"" + collider.bone + "\" is not a bone of the Skeleton");
   } catch (const InputError& e) {
     throw e.prefixed(c.file + ": ");
   }

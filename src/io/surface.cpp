@@ -1,5 +1,6 @@
 // Boundary surface extraction and OBJ writing (surface.hpp).
 #include <sinew/core/collective.hpp>
+#include <sinew/discretization/boundary.hpp>
 #include <sinew/io/surface.hpp>
 
 #include "durable_file.hpp"
@@ -15,20 +16,6 @@
 #include <unordered_map>
 
 namespace sinew {
-
-namespace {
-
-// Outward faces of a positively oriented element in Gmsh/VTK node order (counter-clockwise seen from
-// outside). tet4: the faces opposite nodes 3, 2, 1, 0; hex8: bottom 0-1-2-3, top 4-7.
-constexpr int kTetFaces[4][4] = {{0, 2, 1, -1}, {0, 1, 3, -1}, {0, 3, 2, -1}, {1, 2, 3, -1}};
-constexpr int kHexFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-
-struct Face {
-  std::array<GlobalId, 4> key;  // sorted global node ids (-1 pad for triangles)
-  int element, face;
-};
-
-}  // namespace
 
 void write_obj_file(const std::string& path, const std::vector<double>& x, const std::vector<std::array<int, 3>>& triangles,
                     const std::string& comment) {
@@ -98,55 +85,11 @@ void EmbeddedSkin::write_obj(const std::string& path, const Vector& u, const std
 
 BoundarySurface::BoundarySurface(const Mesh& mesh, const Teuchos::Comm<int>& comm)
     : mesh_(mesh), comm_(raw_comm(comm)), root_(comm.getRank() == 0) {
-  const bool hex = mesh.type == ElementType::Hex8;
-  const int nf = hex ? 6 : 4, nv = hex ? 4 : 3;
-  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
-  const auto owned = [&](int local) { return static_cast<std::size_t>(local) < mesh.n_owned_nodes; };
-  const auto corner = [&](int e, int f, int a) { return hex ? conn(e, kHexFaces[f][a]) : conn(e, kTetFaces[f][a]); };
-
-  // Faces touching an owned node: every element sharing such a face is on this rank.
-  std::vector<Face> faces;
-  for (int e = 0; e < static_cast<int>(mesh.local_elements()); ++e)
-    for (int f = 0; f < nf; ++f) {
-      bool touches = false;
-      Face face{{-1, -1, -1, -1}, e, f};
-      for (int a = 0; a < nv; ++a) {
-        touches |= owned(corner(e, f, a));
-        face.key[a] = mesh.node_gid[corner(e, f, a)];
-      }
-      if (!touches) continue;
-      std::sort(face.key.begin(), face.key.begin() + nv);
-      faces.push_back(face);
-    }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
-
-  std::vector<char> on_surface(mesh.local_nodes(), 0);
-  std::vector<GlobalId> tri_gids;  // faces this rank counts: 3 global ids per triangle
-  for (std::size_t i = 0; i < faces.size();) {
-    std::size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-    if (j - i == 1) {  // on one element only: the boundary
-      const Face& F = faces[i];
-      GlobalId g[4];
-      int lowest = 0;  // the corner with the lowest global id: its owner writes the face
-      for (int a = 0; a < nv; ++a) {
-        on_surface[corner(F.element, F.face, a)] = 1;
-        g[a] = mesh.node_gid[corner(F.element, F.face, a)];
-        if (g[a] < g[lowest]) lowest = a;
-      }
-      if (owned(corner(F.element, F.face, lowest))) {
-        tri_gids.insert(tri_gids.end(), {g[0], g[1], g[2]});
-        if (hex) tri_gids.insert(tri_gids.end(), {g[0], g[2], g[3]});
-      }
-    }
-    i = j;
-  }
-  std::vector<GlobalId> vertex_gids;
-  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
-    if (on_surface[n]) {
-      owned_vertices_.push_back(static_cast<int>(n));
-      vertex_gids.push_back(mesh.node_gid[n]);
-    }
+  const LocalBoundary boundary = local_boundary(mesh);
+  owned_vertices_ = boundary.owned_vertices;
+  std::vector<GlobalId> tri_gids, vertex_gids;  // faces this rank counts: 3 global ids per triangle
+  for (const auto& t : boundary.triangles) tri_gids.insert(tri_gids.end(), t.begin(), t.end());
+  for (int n : owned_vertices_) vertex_gids.push_back(mesh.node_gid[n]);
 
   // Rank 0 gathers the topology once.
   int P = 1;

@@ -2,6 +2,7 @@
 // component prescribed twice), the load path, the skinning predictor and the initial state.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
+#include <sinew/core/parameters.hpp>
 #include <sinew/scenes/scene.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
@@ -128,6 +129,28 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
                            bcs_[conflict].name + "' and '" + bc.name + "'",
                        InputErrorKind::ConflictingConditions);
   }
+  if (d.contact.active()) {
+    try {
+      colliders_ = std::make_unique<Colliders>(d.contact, *skeleton_, *comm, "Contact");
+    } catch (const InputError& e) {
+      throw e.prefixed(file);
+    }
+    // Automatic settings scale with the stiffest law and the mesh: a traction of (mu_L + lambda_L)
+    // pushes a surface point in by a tenth of a cell.
+    const double h = system_->cell_size();
+    ContactSettings cs;
+    cs.self = d.contact.self;
+    cs.stiffness = d.contact.stiffness > 0.0 ? d.contact.stiffness : 10.0 * system_->stiffness_scale() / h;
+    cs.thickness = d.contact.thickness > 0.0 ? d.contact.thickness : 0.05 * h;
+    cs.margin = d.contact.margin > 0.0 ? d.contact.margin : cs.thickness + 0.5 * h;
+    if (!(cs.margin > cs.thickness))
+      throw InputError(file + "Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" +
+                       format_number(cs.thickness) + ")");
+    cs.refine = d.contact.refine;
+    contact_rounds_ = d.contact.rounds;
+    contact_ = std::make_shared<ContactTerm>(*system_, cs, colliders_->shapes());
+    system_->add_term(contact_);
+  }
   std::vector<int> fixed;
   free_.assign(mesh.n_owned_nodes, 1);
   for (const auto& bc : bcs_)
@@ -152,6 +175,16 @@ void Scene::apply_load(double t, Vector& u) {
     }
   const auto& b = loading_.body_force;
   system_->set_body_force({t * b[0], t * b[1], t * b[2]});
+  if (contact_)
+    for (std::size_t k = 0; k < colliders_->size(); ++k) contact_->set_collider_pose(k, colliders_->pose(k, t));
+}
+
+ContactDetection Scene::detect_contact(const Vector& u, bool keep) {
+  ContactDetection d;
+  if (!self_contact()) return d;
+  d = contact_->detect(u, keep);
+  system_->update_pattern();
+  return d;
 }
 
 void Scene::predict(double t0, double t1, Vector& u) const {

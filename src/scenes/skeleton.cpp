@@ -12,21 +12,6 @@
 
 namespace sinew {
 
-Mat3 axis_angle(const std::array<double, 3>& k, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle), t = 1 - c;
-  Mat3 R;
-  R(0, 0) = c + k[0] * k[0] * t;
-  R(0, 1) = k[0] * k[1] * t - k[2] * s;
-  R(0, 2) = k[0] * k[2] * t + k[1] * s;
-  R(1, 0) = k[1] * k[0] * t + k[2] * s;
-  R(1, 1) = c + k[1] * k[1] * t;
-  R(1, 2) = k[1] * k[2] * t - k[0] * s;
-  R(2, 0) = k[2] * k[0] * t - k[1] * s;
-  R(2, 1) = k[2] * k[1] * t + k[0] * s;
-  R(2, 2) = c + k[2] * k[2] * t;
-  return R;
-}
-
 namespace {
 
 std::array<double, 3> unit(const std::array<double, 3>& a) {
@@ -57,6 +42,8 @@ Quat quat_of(const Mat3& R) {
   return q;
 }
 
+}  // namespace
+
 Mat3 slerp(const Mat3& A, const Mat3& B, double s) {
   Quat a = quat_of(A), b = quat_of(B);
   double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
@@ -75,6 +62,47 @@ Mat3 slerp(const Mat3& A, const Mat3& B, double s) {
   for (double& v : q) v /= n;
   return rotation_of_quaternion(q[0], q[1], q[2], q[3]);
 }
+
+KeyframeTrack::KeyframeTrack(const std::array<double, 3>& p, const NamedSections<KeyframeParameters>& keys) : pivot(p) {
+  times.push_back(0.0);
+  angles.push_back(0.0);
+  translations.push_back({0.0, 0.0, 0.0});
+  axes.push_back(keys.empty() ? std::array<double, 3>{0, 0, 1} : unit(keys.front().second.axis));
+  for (const auto& [kname, k] : keys) {
+    times.push_back(k.time);
+    angles.push_back(k.angle);
+    axes.push_back(unit(k.axis));
+    translations.push_back(k.translation);
+  }
+}
+
+Rigid KeyframeTrack::pose(double t) const {
+  std::size_t k = 0;
+  while (k + 1 < times.size() && times[k + 1] < t) ++k;
+  Mat3 R;
+  std::array<double, 3> d;
+  if (k + 1 >= times.size()) {  // after the last keyframe: hold it
+    R = axis_angle(axes[k], angles[k]);
+    d = translations[k];
+  } else {
+    const double s = std::clamp((t - times[k]) / (times[k + 1] - times[k]), 0.0, 1.0);
+    const auto& a0 = axes[k];
+    const auto& a1 = axes[k + 1];
+    if (a0[0] * a1[0] + a0[1] * a1[1] + a0[2] * a1[2] > 1.0 - 1e-12)  // one axis: the angle itself (beyond pi too)
+      R = axis_angle(a1, (1 - s) * angles[k] + s * angles[k + 1]);
+    else
+      R = slerp(axis_angle(a0, angles[k]), axis_angle(a1, angles[k + 1]), s);
+    for (int i = 0; i < 3; ++i) d[i] = (1 - s) * translations[k][i] + s * translations[k + 1][i];
+  }
+  // x -> R (x - pivot) + pivot + d
+  Rigid T;
+  T.R = R;
+  const auto Rp = T.apply(pivot);
+  for (int i = 0; i < 3; ++i) T.t[i] = pivot[i] - Rp[i] + d[i];
+  return T;
+}
+
+namespace {
 
 // The motion file: per bone name, its world transforms frame by frame.
 std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& path) {
@@ -131,17 +159,7 @@ Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos:
   for (const auto& [name, bp] : p.bones) {
     Bone b;
     b.name = name;
-    b.pivot = bp.pivot;
-    b.times.push_back(0.0);
-    b.angles.push_back(0.0);
-    b.translations.push_back({0.0, 0.0, 0.0});
-    b.axes.push_back(bp.keyframes.empty() ? std::array<double, 3>{0, 0, 1} : unit(bp.keyframes.front().second.axis));
-    for (const auto& [kname, k] : bp.keyframes) {
-      b.times.push_back(k.time);
-      b.angles.push_back(k.angle);
-      b.axes.push_back(unit(k.axis));
-      b.translations.push_back(k.translation);
-    }
+    b.track = KeyframeTrack(bp.pivot, bp.keyframes);
     if (!p.motion_file.empty()) {
       const auto it = frames.find(name);
       if (it == frames.end()) throw InputError(where + "/Bones/" + name + ": the motion file has no frames for this bone");
@@ -236,29 +254,7 @@ Rigid Skeleton::local(const Bone& b, double t) const {
     for (int i = 0; i < 3; ++i) T.t[i] = (1 - s) * b.frames[k].t[i] + s * b.frames[k + 1].t[i];
     return T;
   }
-  std::size_t k = 0;
-  while (k + 1 < b.times.size() && b.times[k + 1] < t) ++k;
-  Mat3 R;
-  std::array<double, 3> d;
-  if (k + 1 >= b.times.size()) {  // after the last keyframe: hold it
-    R = axis_angle(b.axes[k], b.angles[k]);
-    d = b.translations[k];
-  } else {
-    const double s = std::clamp((t - b.times[k]) / (b.times[k + 1] - b.times[k]), 0.0, 1.0);
-    const auto& a0 = b.axes[k];
-    const auto& a1 = b.axes[k + 1];
-    if (a0[0] * a1[0] + a0[1] * a1[1] + a0[2] * a1[2] > 1.0 - 1e-12)  // one axis: the angle itself (beyond pi too)
-      R = axis_angle(a1, (1 - s) * b.angles[k] + s * b.angles[k + 1]);
-    else
-      R = slerp(axis_angle(a0, b.angles[k]), axis_angle(a1, b.angles[k + 1]), s);
-    for (int i = 0; i < 3; ++i) d[i] = (1 - s) * b.translations[k][i] + s * b.translations[k + 1][i];
-  }
-  // x -> R (x - pivot) + pivot + d
-  Rigid T;
-  T.R = R;
-  const auto Rp = T.apply(b.pivot);
-  for (int i = 0; i < 3; ++i) T.t[i] = b.pivot[i] - Rp[i] + d[i];
-  return T;
+  return b.track.pose(t);
 }
 
 Rigid Skeleton::transform(std::size_t b, double t) const {

@@ -368,6 +368,15 @@ struct NonlinearSolver::Impl {
   // has a new linear solver, whose first preconditioner setup starts from scratch.
   Teuchos::RCP<NOX::Thyra::Group> group;
   double cg_per_newton_after_rebuild = 0.0;
+  unsigned pattern_version = 0;  // the system's pattern W was made on
+
+  // A term asked for new couplings (contact): W on the new graph, and a preconditioner set up afresh.
+  void follow_pattern() {
+    if (sys.pattern_version() == pattern_version) return;
+    W = model->create_W_op();
+    pattern_version = sys.pattern_version();
+    rebuild_next();
+  }
 
   void rebuild_next() {
     group = Teuchos::null;
@@ -445,6 +454,7 @@ struct NonlinearSolver::Impl {
     }
     model->set_W_factory(lowsf);
     W = model->create_W_op();
+    pattern_version = s.pattern_version();
   }
 };
 
@@ -477,6 +487,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   const SolverParameters& p = m.params;
   const auto t0 = Clock::now();
   SolveState state{policy, {}, 0.0, 0.0};
+  m.follow_pattern();
   m.model->attach(&state);
   auto x = Thyra::createVector(Teuchos::rcpFromRef(u), Thyra::createVectorSpace<double, LO, GO, NodeType>(u.getMap()));
   NOX::Thyra::Vector x0(x);

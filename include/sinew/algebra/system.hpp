@@ -83,6 +83,11 @@ class System {
   EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default,
                             std::optional<Projection> projection = std::nullopt) const;
 
+  // The gradient with no Dirichlet elimination, of every term or of one: at an equilibrium its
+  // prescribed rows are the reactions, and one term's part is the force that term exerts (e.g. the
+  // contact force on a body).
+  void gradient(const Vector& u, Vector& force, const EnergyTerm* only = nullptr) const;
+
   // Per owned element: volume-averaged energy density and J at u.
   void element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const;
 
@@ -100,7 +105,7 @@ class System {
   void build_graph();
   void compute_nodal_weights();
   EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
-                       ElementFields<DeviceMemory> fields) const;
+                       ElementFields<DeviceMemory> fields, const EnergyTerm* only = nullptr, bool eliminate = true) const;
   // Rows and columns of Dirichlet DOFs: off-diagonal entries zeroed, the diagonal kept (the sum of the
   // elements' own diagonal entries, a positive scale matching the stiffness, so CG sees a well-conditioned
   // identity-like block there); their force entries zeroed.

@@ -9,6 +9,7 @@
 #include <mpi.h>
 
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -86,6 +87,32 @@ std::vector<std::vector<T>> alltoallv(MPI_Comm comm, const std::vector<std::vect
       if (rc[r] > 0) std::memcpy(reinterpret_cast<char*>(recv[r].data()) + offset, rbuf.data() + rd[r], rc[r]);
   }
   return recv;
+}
+
+// Every rank's `mine` concatenated in rank order, on every rank; `counts` (if given) receives each
+// rank's item count. Meant for surface-sized data: more than 2 GiB in all is an error on every rank.
+template <class T>
+std::vector<T> allgatherv(MPI_Comm comm, const std::vector<T>& mine, std::vector<long long>* counts = nullptr) {
+  static_assert(std::is_trivially_copyable_v<T>, "records are sent as bytes");
+  int P = 1;
+  MPI_Comm_size(comm, &P);
+  long long n = static_cast<long long>(mine.size());
+  std::vector<long long> all_n(P);
+  MPI_Allgather(&n, 1, MPI_LONG_LONG, all_n.data(), 1, MPI_LONG_LONG, comm);
+  long long total = 0;
+  for (long long k : all_n) total += k;
+  if (total * static_cast<long long>(sizeof(T)) > 2147483647LL)
+    throw std::runtime_error("allgatherv: " + std::to_string(total * sizeof(T)) + " bytes exceed what one exchange carries");
+  std::vector<int> bytes(P), displs(P, 0);
+  for (int r = 0; r < P; ++r) {
+    bytes[r] = static_cast<int>(all_n[r] * static_cast<long long>(sizeof(T)));
+    if (r > 0) displs[r] = displs[r - 1] + bytes[r - 1];
+  }
+  std::vector<T> out(static_cast<std::size_t>(total));
+  MPI_Allgatherv(mine.data(), bytes.empty() ? 0 : static_cast<int>(n * sizeof(T)), MPI_BYTE, out.data(), bytes.data(),
+                 displs.data(), MPI_BYTE, comm);
+  if (counts) *counts = all_n;
+  return out;
 }
 
 }  // namespace sinew

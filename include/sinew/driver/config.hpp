@@ -20,6 +20,7 @@ struct SceneFileParameters {
   MaterialParameters material;
   LoadingParameters loading;
   SkeletonParameters skeleton;
+  ContactParameters contact;
   SolverParameters solver;
   OutputParameters output;
 
@@ -31,6 +32,7 @@ struct SceneFileParameters {
     v.section("Material", material, "hyperelastic law(s) (required)");
     v.section("Loading", loading, "boundary conditions, body force and load steps");
     v.section("Skeleton", skeleton, "bones that drive the flesh");
+    v.section("Contact", contact, "self contact and kinematic colliders (penalty springs on the surface)");
     v.section("Solver", solver, "Newton, CG and multigrid parameters");
     v.section("Output", output, "HDF5/XDMF fields, log and checkpoints");
   }
@@ -46,7 +48,7 @@ struct SceneConfig {
   SceneFileParameters params;   // every section, parsed and checked
 
   SceneDescription scene() const {
-    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton};
+    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton, params.contact};
   }
 };
 

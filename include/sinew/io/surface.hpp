@@ -1,11 +1,5 @@
-// The boundary surface of the mesh as triangles, for renderers (Blender, Houdini, Maya read OBJ):
-// faces that belong to exactly one element, oriented outward (counter-clockwise seen from outside),
-// hex8 quads split in two along their 0-2 diagonal; per-vertex normals area-weighted in the current
-// configuration.
-//
-// Distributed without communicating the volume mesh: a face is counted by the rank that owns its
-// lowest-numbered node, which holds every element around that node (the ghost layer), so it sees every
-// element sharing the face. Each rank also knows which of its owned nodes lie on the surface. Rank 0
+// The boundary surface of the mesh (discretization/boundary.hpp) as triangles for renderers (Blender,
+// Houdini, Maya read OBJ), with per-vertex normals area-weighted in the current configuration. Rank 0
 // gathers the surface (triangles once, vertex positions per write) and writes the file; its size grows
 // with the surface, not the volume.
 #pragma once

@@ -17,6 +17,7 @@
 #include <sinew/algebra/system.hpp>
 #include <sinew/core/section.hpp>
 #include <sinew/materials/parameters.hpp>
+#include <sinew/scenes/contact.hpp>
 #include <sinew/scenes/region.hpp>
 #include <sinew/scenes/skeleton.hpp>
 
@@ -100,6 +101,7 @@ struct SceneDescription {
   MaterialParameters material;
   LoadingParameters loading;
   SkeletonParameters skeleton;
+  ContactParameters contact;
 };
 
 // A prescribed motion resolved on this rank's nodes: a boundary condition, or a bone.
@@ -135,11 +137,22 @@ class Scene {
   // The starting displacement: zero, or the "scramble" of the paper's Fig. 3.
   void initial_state(Vector& u) const;
 
+  // Contact (null without a Contact section). Collider poses follow apply_load.
+  ContactTerm* contact() { return contact_.get(); }
+  bool self_contact() const { return contact_ && contact_->settings().self; }
+  int contact_rounds() const { return contact_rounds_; }
+  // Collective: self-contact pairs at u, and the system's pattern grown for them.
+  // With `keep`, pairs of the last pass are kept (see ContactTerm::detect).
+  ContactDetection detect_contact(const Vector& u, bool keep = false);
+
  private:
   std::string name_;
   LoadingParameters loading_;
   std::unique_ptr<System> system_;
   std::unique_ptr<Skeleton> skeleton_;
+  std::unique_ptr<Colliders> colliders_;
+  std::shared_ptr<ContactTerm> contact_;
+  int contact_rounds_ = 1;
   std::vector<BoundaryCondition> bcs_;
   std::vector<char> free_;  // owned nodes with no prescribed component
   Kokkos::View<double* [3]>::HostMirror X_;  // reference coordinates of local nodes

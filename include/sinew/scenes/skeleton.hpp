@@ -20,7 +20,7 @@
 // with weights falling off with the distance to each bone (1/d^p, normalized).
 #pragma once
 
-#include <sinew/core/small_matrix.hpp>
+#include <sinew/core/rigid.hpp>
 #include <sinew/scenes/region.hpp>
 
 #include <Teuchos_Comm.hpp>
@@ -29,33 +29,6 @@
 #include <memory>
 
 namespace sinew {
-
-// A rigid transform x -> R x + t.
-struct Rigid {
-  Mat3 R = Mat3::identity();
-  std::array<double, 3> t{{0.0, 0.0, 0.0}};
-  std::array<double, 3> apply(const std::array<double, 3>& x) const {
-    std::array<double, 3> y;
-    for (int i = 0; i < 3; ++i) y[i] = R(i, 0) * x[0] + R(i, 1) * x[1] + R(i, 2) * x[2] + t[i];
-    return y;
-  }
-  // this after other: x -> this(other(x))
-  Rigid after(const Rigid& o) const {
-    Rigid c;
-    c.R = R * o.R;
-    c.t = apply(o.t);
-    return c;
-  }
-  Rigid inverse() const {
-    Rigid i;
-    i.R = transpose(R);
-    for (int r = 0; r < 3; ++r) i.t[r] = -(i.R(r, 0) * t[0] + i.R(r, 1) * t[1] + i.R(r, 2) * t[2]);
-    return i;
-  }
-};
-
-// Rotation about a unit axis by an angle (Rodrigues).
-Mat3 axis_angle(const std::array<double, 3>& unit_axis, double angle);
 
 struct KeyframeParameters {
   double time = 0.0, angle = 0.0;
@@ -73,6 +46,24 @@ struct KeyframeParameters {
     if (!(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2] > 0.0)) c.fail("'Axis' must be a non-zero vector");
   }
 };
+
+// A motion over the load fraction t from keyframes: a rotation about a pivot followed by a translation,
+// with an implicit rest key at t = 0, interpolated between keys (the angle linearly about a shared
+// axis, otherwise quaternion slerp; the translation linearly) and held after the last. Bones and
+// colliders move this way.
+struct KeyframeTrack {
+  std::array<double, 3> pivot{};
+  std::vector<double> times;  // with t = 0 first
+  std::vector<std::array<double, 3>> axes, translations;
+  std::vector<double> angles;
+
+  KeyframeTrack() = default;
+  KeyframeTrack(const std::array<double, 3>& pivot, const NamedSections<KeyframeParameters>& keys);
+  Rigid pose(double t) const;
+};
+
+// Rotation interpolated between A (s = 0) and B (s = 1) along the shorter arc (quaternion slerp).
+Mat3 slerp(const Mat3& A, const Mat3& B, double s);
 
 struct BoneParameters {
   std::string parent;
@@ -129,10 +120,7 @@ class Skeleton {
   struct Bone {
     std::string name;
     int parent = -1;
-    std::array<double, 3> pivot{};
-    std::vector<double> times;  // keyframes, with t = 0 first
-    std::vector<std::array<double, 3>> axes, translations;
-    std::vector<double> angles;
+    KeyframeTrack track;
     std::vector<Rigid> frames;  // world transforms per frame (motion file), else empty
     std::vector<int> nodes;     // attached local nodes
     std::array<double, 3> seg_a{}, seg_b{};  // the bone's segment for the skinning weights

@@ -1,0 +1,144 @@
+// Contact as a term of the total energy (Smith et al. 2018, Sec. 6, after Hirota et al. 2001, Irving
+// et al. 2004 and McAdams et al. 2011): penalty springs on the boundary surface's vertices (the samples),
+// frictionless, one-sided.
+//
+// Self-contact. A detection pass (between solves, not inside Newton, so that the energy a solve
+// minimizes does not change under it) pairs samples with target points on the surface:
+//   - a sample found inside a deformed element (hex8 split into six tets) that is not in its ring at rest
+//     (an element sharing a node with an element of the sample) is mapped to the reference domain by
+//     that tet's barycentric coordinates; the closest reference surface point (away from the sample's
+//     ring) is mapped back to the deformed surface: the paper's two linear maps. With `refine`, the
+//     target then walks over neighbouring triangles of the deformed surface to the closest point
+//     (the paper's optional local optimization, "typically converges in a single iteration");
+//   - a sample outside but within `margin` of a surface triangle outside its ring is paired with the
+//     closest point, so that a contact about to close is resisted in the same solve.
+// Each pair keeps its target triangle (a, b, c), the barycentric weights beta of the target point and
+// the outward normal n of the target triangle at detection. Its energy is
+//   E = k A / 2 max(0, delta - g)^2,   g = n . (x_s - beta_a x_a - beta_b x_b - beta_c x_c),
+// with A the sample's reference area, k the stiffness (traction per unit of penetration) and delta the
+// contact thickness. For a frozen n and beta, E is a convex function of the twelve coordinates: its
+// Hessian k A (w (x) n)(w (x) n)^T, w = (1, -beta), is PSD and exact.
+//
+// Colliders (kinematic: a half-space, a sphere, a capsule, an infinite cylinder, or a closed triangle
+// mesh, each at a pose set per step) act on every sample with E = k A / 2 max(0, delta - phi(x_s))^2, phi
+// the signed distance (positive outside); its Hessian k A (grad phi grad phi^T - (delta - phi) hess phi)
+// is projected to k A grad phi grad phi^T (the curvature part is negative semi-definite for convex
+// shapes, so this is the PSD projection; for a mesh collider it is the Gauss-Newton part).
+//
+// Across ranks: the surface (vertices, triangles, rings) is replicated; each rank locates samples in
+// the elements it owns and pairs its own samples by proximity; the pairs are gathered, and each rank
+// keeps those touching a node it owns, asking the System for the couplings its rows need.
+#pragma once
+
+#include <sinew/algebra/energy_term.hpp>
+#include <sinew/core/rigid.hpp>
+#include <sinew/discretization/aabb_tree.hpp>
+#include <sinew/discretization/boundary.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace sinew {
+
+class System;
+
+// A kinematic collider's shape in its own frame.
+struct ColliderShape {
+  enum class Kind { HalfSpace, Sphere, Capsule, Cylinder, Mesh };
+  Kind kind = Kind::HalfSpace;
+  geom::Vec point{}, normal{{0.0, 0.0, 1.0}};  // half-space: a point on the plane and the outward normal
+  geom::Vec center{};                          // sphere
+  geom::Vec a{}, b{};                          // capsule: the segment; cylinder: two points on the axis
+  double radius = 0.0;                          // sphere, capsule, cylinder
+  std::shared_ptr<const TriangleSurface> surface;  // mesh: closed and outward (read_triangle_surface)
+
+  // Builds what a mesh collider's queries need; throws InputError for a degenerate shape.
+  void prepare();
+  // Signed distance at x (positive outside) and its gradient (unit outward direction).
+  double distance(const geom::Vec& x, geom::Vec& gradient) const;
+  // A box outside which the distance exceeds `band` (infinite for a half-space).
+  geom::Box bounds(double band) const;
+
+ private:
+  geom::AabbTree tree_;
+  std::vector<geom::Vec> face_normal_, vertex_normal_;  // angle-weighted pseudo-normals at vertices
+  std::vector<std::array<geom::Vec, 3>> edge_normal_;  // per triangle, its edges (0-1, 1-2, 2-0)
+};
+
+struct ContactSettings {
+  bool self = true;
+  double stiffness = 0.0;  // k: traction per unit of penetration (> 0)
+  double thickness = 0.0;  // delta: the springs act below this gap (>= 0)
+  double margin = 0.0;     // proximity pairing distance (> thickness)
+  bool refine = true;      // walk targets to the closest deformed-surface point
+};
+
+// What one detection pass found (global counts).
+struct ContactDetection {
+  long long inside = 0;     // samples inside the deformed volume (paired through the reference map)
+  long long proximity = 0;  // samples near the surface (paired with the closest point)
+  long long refined = 0;    // inside pairs whose target moved in the local search
+  long long unpaired = 0;   // inside samples with no admissible target
+  long long kept = 0;       // pairs kept from the previous pass (keep mode)
+  long long added = 0;      // pairs that are new (every pair when not keeping)
+  double seconds = 0.0;
+};
+
+class ContactTerm final : public EnergyTerm {
+ public:
+  // Collective (replicates the boundary surface). The system must outlive the term.
+  ContactTerm(const System& system, const ContactSettings& settings, std::vector<ColliderShape> colliders);
+
+  const char* name() const override { return "contact"; }
+  void add(const TermInput& in, TermOutput& out) const override;
+  void couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) const override;
+  void columns_changed(const Map& columns) override;
+
+  // Collective: self-contact pairs at displacement u (owned DOFs). Call System::update_pattern after.
+  // With `keep`, the pairs of the last pass stay as they are (same target, weights and normal, so the
+  // energy a converged state minimized does not move) while their gap is within the margin, and only
+  // samples without one are paired anew: the next round of a step adds what the last solve missed.
+  ContactDetection detect(const Vector& u, bool keep = false);
+  void set_collider_pose(std::size_t k, const Rigid& pose) { poses_[k] = pose; }
+  std::size_t colliders() const { return colliders_.size(); }
+  const SurfaceMesh& surface() const { return surface_; }
+  const ContactSettings& settings() const { return settings_; }
+  // Pairs kept on this rank and their global count.
+  std::size_t local_pairs() const { return pairs_.size(); }
+  long long global_pairs() const { return global_pairs_; }
+
+  // One self-contact spring (public for tests).
+  struct Pair {
+    GlobalId node[4];  // the sample, then the target triangle's vertices
+    double w[4];       // 1, -beta_a, -beta_b, -beta_c
+    double X[4][3];    // reference positions of the four nodes
+    double normal[3];  // outward normal of the target at detection
+    double area;       // the sample's reference area
+    int owner;         // the rank that owns the sample and counts the energy
+    int col[4];        // column of each node's first DOF on this rank (-1: none)
+  };
+  const std::vector<Pair>& pairs() const { return pairs_; }
+
+ private:
+  const System& system_;
+  ContactSettings settings_;
+  std::vector<ColliderShape> colliders_;
+  std::vector<Rigid> poses_;
+  SurfaceMesh surface_;
+  geom::AabbTree reference_tree_;  // of the reference surface triangles
+  std::vector<int> owned_samples_;   // local owned nodes on the surface
+  std::vector<int> sample_vertex_;   // ... their surface vertex
+  std::vector<Pair> pairs_;
+  // Every pair of the last pass, the same on every rank: sample vertex, target triangle, weights, normal.
+  struct Chosen {
+    int vertex, triangle;
+    double beta[3], normal[3];
+  };
+  std::vector<Chosen> chosen_;
+  long long global_pairs_ = 0;
+  int rank_ = 0;
+};
+
+}  // namespace sinew

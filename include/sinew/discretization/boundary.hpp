@@ -1,0 +1,48 @@
+// The boundary surface of a distributed mesh: faces that belong to exactly one element, oriented
+// outward (counter-clockwise seen from outside), hex8 quads split in two along their 0-2 diagonal.
+//
+// Found without communicating the volume mesh: a face is counted by the rank that owns its
+// lowest-numbered node, which holds every element around that node (the ghost layer), so it sees every
+// element sharing the face. Renderers gather it on rank 0 (io/surface.hpp); contact needs all of it on
+// every rank (replicate_boundary), which costs memory in proportion to the surface, not the volume.
+#pragma once
+
+#include <sinew/discretization/geometry.hpp>
+#include <sinew/discretization/mesh.hpp>
+
+#include <array>
+#include <vector>
+
+namespace sinew {
+
+// This rank's share of the boundary.
+struct LocalBoundary {
+  std::vector<std::array<GlobalId, 3>> triangles;  // the faces this rank counts, as global node ids
+  std::vector<int> owned_vertices;                  // local owned nodes on the surface
+};
+LocalBoundary local_boundary(const Mesh& mesh);
+
+// The whole boundary surface, the same on every rank.
+struct SurfaceMesh {
+  std::vector<GlobalId> gid;                  // vertex -> global node id, ascending
+  std::vector<int> owner;                     // vertex -> the rank owning the node
+  std::vector<geom::Vec> X;                  // reference positions
+  std::vector<std::array<int, 3>> triangles;  // vertex indices, outward
+  std::vector<double> area;                   // per vertex: a third of the reference area of its triangles
+  std::vector<int> tri_offsets, vertex_tris;  // the triangles around each vertex (CSR)
+  // Per vertex, the global ids of the nodes that share an element with it, itself included (CSR,
+  // ascending): its neighbours at rest, which contact never pairs it with.
+  std::vector<int> ring_offsets;
+  std::vector<GlobalId> ring;
+
+  std::size_t vertices() const { return gid.size(); }
+  // The vertex of a global node id, -1 when the node is not on the surface.
+  int vertex_of(GlobalId g) const;
+  // Whether global node g shares an element with vertex v (or is v).
+  bool in_ring(int v, GlobalId g) const;
+};
+
+// Collective.
+SurfaceMesh replicate_boundary(const Mesh& mesh, const Teuchos::Comm<int>& comm);
+
+}  // namespace sinew

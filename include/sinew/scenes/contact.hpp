@@ -1,0 +1,123 @@
+// The "Contact" section of a scene: self-contact on the boundary surface and kinematic colliders
+// (algebra/terms/contact.hpp), e.g.
+//
+//   <ParameterList name="Contact">
+//     <Parameter name="Self contact" type="bool" value="true"/>
+//     <ParameterList name="Colliders">
+//       <ParameterList name="floor">  Shape half-space, Point, Normal </ParameterList>
+//       <ParameterList name="ball">   Shape sphere, Center, Radius, Keyframes (or Bone) </ParameterList>
+//     </ParameterList>
+//   </ParameterList>
+//
+// A collider moves as a bone does: keyframes over the load fraction (rotation about Pivot, then a
+// translation), or rigidly with a bone of the Skeleton. Its shape is given at rest (t = 0).
+#pragma once
+
+#include <sinew/algebra/terms/contact.hpp>
+#include <sinew/core/section.hpp>
+#include <sinew/scenes/skeleton.hpp>
+
+namespace sinew {
+
+struct ColliderParameters {
+  enum class Shape { HalfSpace, Sphere, Capsule, Cylinder, Mesh };
+  Shape shape = Shape::HalfSpace;
+  std::array<double, 3> point{}, normal{}, center{}, start{}, end{}, pivot{};
+  double radius = 0.0;
+  std::string surface, bone;
+  NamedSections<KeyframeParameters> keyframes;
+
+  template <class V>
+  void visit(V& v) {
+    v.choice("Shape", shape, Shape::HalfSpace,
+             Choices<Shape>{{"half-space", Shape::HalfSpace},
+                            {"sphere", Shape::Sphere},
+                            {"capsule", Shape::Capsule},
+                            {"cylinder", Shape::Cylinder},
+                            {"mesh", Shape::Mesh}},
+             "half-space (Point, Normal), sphere (Center, Radius), capsule (Start, End, Radius), cylinder "
+             "(infinite: Start and End on its axis, Radius) or mesh (a closed Surface)");
+    v.entry("Point", point, {0.0, 0.0, 0.0}, "half-space: a point on its plane");
+    v.entry("Normal", normal, {0.0, 0.0, 1.0}, "half-space: the normal pointing out of the collider (into the free side)");
+    v.entry("Center", center, {0.0, 0.0, 0.0}, "sphere: its centre");
+    v.entry("Start", start, {0.0, 0.0, 0.0}, "capsule: one end of its segment; cylinder: a point on its axis");
+    v.entry("End", end, {0.0, 0.0, 1.0}, "capsule: the other end; cylinder: another point on its axis");
+    v.entry("Radius", radius, 0.0, "sphere, capsule, cylinder: the radius", Range::non_negative());
+    v.entry("Surface", surface, std::string(""),
+            "mesh: a closed triangle surface (.obj or .stl; a relative path is taken from the scene file's folder)");
+    v.entry("Bone", bone, std::string(""), "move rigidly with this bone of the Skeleton (instead of keyframes)");
+    v.entry("Pivot", pivot, {0.0, 0.0, 0.0}, "the point keyframe rotations turn about");
+    v.sections("Keyframes", keyframes, "one sublist per pose (Time, Axis, Angle, Translation), ordered by Time");
+  }
+  template <class Context>
+  void check(const Context& c) const {
+    const bool round = shape == Shape::Sphere || shape == Shape::Capsule || shape == Shape::Cylinder;
+    if (round && !(radius > 0.0)) c.fail("a sphere, capsule or cylinder needs 'Radius' > 0", InputErrorKind::MissingEntry);
+    if (shape == Shape::HalfSpace && !(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2] > 0.0))
+      c.fail("'Normal' must be a non-zero vector");
+    if (shape == Shape::Cylinder && start == end) c.fail("a cylinder needs different points 'Start' and 'End' on its axis");
+    if (shape == Shape::Mesh && surface.empty())
+      c.fail("a mesh collider needs 'Surface' (a closed .obj or .stl)", InputErrorKind::MissingEntry);
+    if (shape != Shape::Mesh && c.given("Surface")) c.fail("'Surface' applies to Shape mesh only");
+    if (!bone.empty() && !keyframes.empty()) c.fail("give 'Bone' or 'Keyframes', not both");
+    double last = 0.0;
+    for (const auto& [kname, k] : keyframes) {
+      if (!(k.time > last)) c.fail("Keyframes/" + kname + ": 'Time' must exceed the previous keyframe's (and 0)");
+      last = k.time;
+    }
+  }
+};
+
+struct ContactParameters {
+  bool self = false;
+  double stiffness = 0.0, thickness = 0.0, margin = 0.0;
+  bool refine = true;
+  int rounds = 0;
+  NamedSections<ColliderParameters> colliders;
+
+  template <class V>
+  void visit(V& v) {
+    v.entry("Self contact", self, false, "the body's surface pushes back where it meets itself (Sec. 6)");
+    v.entry("Stiffness", stiffness, 0.0,
+            "penalty stiffness k: traction per unit of penetration (0: 10 (mu_L + lambda_L) / h, h the mean edge length)",
+            Range::non_negative());
+    v.entry("Thickness", thickness, 0.0,
+            "the gap below which the springs push (0: 0.05 h); the deepest penetration is reported per step",
+            Range::non_negative());
+    v.entry("Margin", margin, 0.0,
+            "self contact: surface points this close to the surface are paired before they touch (0: thickness + h / 2)",
+            Range::non_negative());
+    v.entry("Refine targets", refine, true,
+            "self contact: move each target to the closest point of the deformed surface nearby (the paper's local "
+            "optimization)");
+    v.entry("Maximum rounds", rounds, 4,
+            "self contact: detect-and-solve rounds per step (a round after a solve that needed no Newton iteration ends it)",
+            Range::closed(1, 100));
+    v.sections("Colliders", colliders, "one sublist per kinematic collider, named as you like");
+  }
+  bool active() const { return self || !colliders.empty(); }
+  template <class Context>
+  void check(const Context& c) const {
+    if (c.given("Margin") && margin > 0.0 && thickness > 0.0 && !(margin > thickness))
+      c.fail("'Margin' must exceed 'Thickness'");
+  }
+};
+
+// The colliders' shapes and motions on a skeleton. Collective (a mesh surface is read on every rank
+// and its failure agreed on); throws InputError naming the collider.
+class Colliders {
+ public:
+  Colliders(const ContactParameters& p, const Skeleton& skeleton, const Teuchos::Comm<int>& comm, const std::string& where);
+  std::vector<ColliderShape> shapes() const { return shapes_; }
+  std::size_t size() const { return shapes_.size(); }
+  // The pose of collider k at load fraction t.
+  Rigid pose(std::size_t k, double t) const;
+
+ private:
+  const Skeleton& skeleton_;
+  std::vector<ColliderShape> shapes_;
+  std::vector<KeyframeTrack> tracks_;
+  std::vector<int> bone_;  // -1: keyframes
+};
+
+}  // namespace sinew

@@ -1,0 +1,496 @@
+// ContactTerm: collider distances, self-contact detection and the penalty energy (terms/contact.hpp).
+#include <sinew/algebra/system.hpp>
+#include <sinew/algebra/terms/contact.hpp>
+#include <sinew/core/collective.hpp>
+#include <sinew/core/errors.hpp>
+
+#include <Tpetra_Import.hpp>
+#include <Tpetra_Vector.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+
+namespace sinew {
+
+using namespace geom;
+
+static_assert(Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible,
+              "the contact term runs on the host: it needs host-accessible vectors and matrices");
+
+namespace {
+
+Vec triangle_normal(const Vec& a, const Vec& b, const Vec& c) { return normalized(cross(b - a, c - a)); }
+
+double angle_between(const Vec& u, const Vec& v) {
+  const double nu = norm(u), nv = norm(v);
+  if (!(nu > 0.0 && nv > 0.0)) return 0.0;
+  return std::acos(std::clamp(dot(u, v) / (nu * nv), -1.0, 1.0));
+}
+
+// Hex8 split into six tetrahedra around its 0-6 diagonal (Gmsh/VTK node order): a point of a deformed
+// hex lies in one of them (the paper locates samples in "a tetrahedralization of the hexahedral mesh").
+constexpr int kHexTets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+
+}  // namespace
+
+// ---- colliders ---------------------------------------------------------------------------------------
+
+void ColliderShape::prepare() {
+  switch (kind) {
+    case Kind::HalfSpace:
+      if (!(norm(normal) > 0.0)) throw InputError("a half-space needs a non-zero 'Normal'");
+      normal = normalized(normal);
+      return;
+    case Kind::Sphere:
+    case Kind::Capsule:
+    case Kind::Cylinder:
+      if (!(radius > 0.0)) throw InputError("a sphere, capsule or cylinder needs 'Radius' > 0");
+      if (kind == Kind::Cylinder && !(distance2(a, b) > 0.0))
+        throw InputError("a cylinder needs two different points 'Start' and 'End' on its axis");
+      return;
+    case Kind::Mesh: break;
+  }
+  if (!surface) throw InputError("a mesh collider needs a closed 'Surface'");
+  const auto& V = surface->vertices;
+  const auto& T = surface->triangles;
+  face_normal_.resize(T.size());
+  vertex_normal_.assign(V.size(), Vec{0.0, 0.0, 0.0});
+  edge_normal_.assign(T.size(), {});
+  std::vector<Box> boxes(T.size());
+  std::map<std::pair<int, int>, std::vector<int>> edges;  // undirected edge -> its triangles
+  for (std::size_t t = 0; t < T.size(); ++t) {
+    const Vec &a = V[T[t][0]], &b = V[T[t][1]], &c = V[T[t][2]];
+    face_normal_[t] = triangle_normal(a, b, c);
+    for (int k = 0; k < 3; ++k) {
+      const int i = T[t][k], j = T[t][(k + 1) % 3], l = T[t][(k + 2) % 3];
+      // Angle-weighted vertex pseudo-normals (Baerentzen and Aanaes 2005): the sign of the distance is
+      // then right wherever the closest point lies.
+      const double angle = angle_between(V[j] - V[i], V[l] - V[i]);
+      vertex_normal_[i] = vertex_normal_[i] + angle * face_normal_[t];
+      edges[{std::min(i, j), std::max(i, j)}].push_back(static_cast<int>(t));
+    }
+    boxes[t].add(a);
+    boxes[t].add(b);
+    boxes[t].add(c);
+  }
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int i = T[t][k], j = T[t][(k + 1) % 3];
+      Vec n{0.0, 0.0, 0.0};
+      for (int u : edges[{std::min(i, j), std::max(i, j)}]) n = n + face_normal_[u];
+      edge_normal_[t][k] = n;
+    }
+  tree_.build(boxes);
+}
+
+double ColliderShape::distance(const Vec& x, Vec& g) const {
+  auto from_point = [&](const Vec& q, double r) {  // distance to a ball of radius r around q
+    const Vec d = x - q;
+    const double l = norm(d);
+    g = l > 0.0 ? (1.0 / l) * d : Vec{0.0, 0.0, 1.0};
+    return l - r;
+  };
+  switch (kind) {
+    case Kind::HalfSpace: g = normal; return dot(x - point, normal);
+    case Kind::Sphere: return from_point(center, radius);
+    case Kind::Capsule: {
+      const double s = closest_on_segment(x, a, b);
+      return from_point(a + s * (b - a), radius);
+    }
+    case Kind::Cylinder: {
+      const Vec ab = b - a;
+      const double s = dot(x - a, ab) / dot(ab, ab);
+      return from_point(a + s * ab, radius);
+    }
+    case Kind::Mesh: break;
+  }
+  const auto& V = surface->vertices;
+  const auto& T = surface->triangles;
+  double best2 = 0.0;
+  const int t = tree_.closest(x, HUGE_VAL, [&](int k) {
+    double w[3];
+    return distance2(x, closest_on_triangle(x, V[T[k][0]], V[T[k][1]], V[T[k][2]], w));
+  }, best2);
+  double w[3];
+  const Vec q = closest_on_triangle(x, V[T[t][0]], V[T[t][1]], V[T[t][2]], w);
+  // The pseudo-normal of the feature the closest point lies on: the face, an edge or a vertex.
+  Vec pn = face_normal_[t];
+  const int on = (w[0] > 1e-12) + (w[1] > 1e-12) + (w[2] > 1e-12);
+  if (on == 1) {
+    pn = vertex_normal_[T[t][w[0] > 1e-12 ? 0 : (w[1] > 1e-12 ? 1 : 2)]];
+  } else if (on == 2) {
+    const int k = w[2] <= 1e-12 ? 0 : (w[0] <= 1e-12 ? 1 : 2);  // edge (0-1), (1-2) or (2-0)
+    pn = edge_normal_[t][k];
+  }
+  const Vec d = x - q;
+  const double l = std::sqrt(best2);
+  const double sign = dot(d, pn) >= 0.0 ? 1.0 : -1.0;
+  g = l > 1e-14 ? (sign / l) * d : normalized(pn);
+  return sign * l;
+}
+
+Box ColliderShape::bounds(double band) const {
+  Box b;
+  const double big = 1e300;
+  switch (kind) {
+    case Kind::HalfSpace:
+    case Kind::Cylinder:
+      b.lo = {-big, -big, -big};
+      b.hi = {big, big, big};
+      return b;
+    case Kind::Sphere:
+      b.add(center);
+      b.inflate(radius + band);
+      return b;
+    case Kind::Capsule:
+      b.add(a);
+      b.add(this->b);
+      b.inflate(radius + band);
+      return b;
+    case Kind::Mesh: break;
+  }
+  b.add(Vec{surface->lower[0], surface->lower[1], surface->lower[2]});
+  b.add(Vec{surface->upper[0], surface->upper[1], surface->upper[2]});
+  b.inflate(band);
+  return b;
+}
+
+// ---- the term ----------------------------------------------------------------------------------------
+
+ContactTerm::ContactTerm(const System& system, const ContactSettings& settings, std::vector<ColliderShape> colliders)
+    : system_(system), settings_(settings), colliders_(std::move(colliders)), poses_(colliders_.size()) {
+  rank_ = system.comm()->getRank();
+  surface_ = replicate_boundary(system.mesh(), *system.comm());
+  std::vector<Box> boxes(surface_.triangles.size());
+  for (std::size_t t = 0; t < boxes.size(); ++t)
+    for (int v : surface_.triangles[t]) boxes[t].add(surface_.X[v]);
+  reference_tree_.build(boxes);
+  owned_samples_ = local_boundary(system.mesh()).owned_vertices;
+  for (int n : owned_samples_) sample_vertex_.push_back(surface_.vertex_of(system.mesh().node_gid[n]));
+  for (auto& c : colliders_) c.prepare();
+}
+
+void ContactTerm::columns_changed(const Map& columns) {
+  for (Pair& p : pairs_)
+    for (int j = 0; j < 4; ++j) {
+      const LO lid = columns.getLocalElement(3 * static_cast<GO>(p.node[j]));
+      p.col[j] = lid == Teuchos::OrdinalTraits<LO>::invalid() ? -1 : static_cast<int>(lid);
+    }
+}
+
+void ContactTerm::couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) const {
+  // Each pair couples its four nodes in the rows this rank owns. The sample's row also reserves the
+  // vertices around the target triangle (and they reserve it), so that a target sliding to a neighbour
+  // at the next detection needs no new pattern.
+  auto owned = [&](GlobalId g) { return surface_.owner[surface_.vertex_of(g)] == rank_; };
+  for (const Pair& p : pairs_) {
+    for (int j = 0; j < 4; ++j) {
+      if (!owned(p.node[j])) continue;
+      for (int l = 0; l < 4; ++l)
+        if (l != j) out.emplace_back(p.node[j], p.node[l]);
+    }
+    const bool sample_owned = owned(p.node[0]);
+    for (int j = 1; j < 4; ++j) {
+      const int v = surface_.vertex_of(p.node[j]);
+      for (int k = surface_.tri_offsets[v]; k < surface_.tri_offsets[v + 1]; ++k)
+        for (int m : surface_.triangles[surface_.vertex_tris[k]]) {
+          const GlobalId g = surface_.gid[m];
+          if (g == p.node[0]) continue;
+          if (sample_owned) out.emplace_back(p.node[0], g);
+          if (surface_.owner[m] == rank_) out.emplace_back(g, p.node[0]);
+        }
+    }
+  }
+}
+
+void ContactTerm::add(const TermInput& in, TermOutput& out) const {
+  if (pairs_.empty() && colliders_.empty()) return;
+  const auto u = in.u;
+  const auto f = out.force;
+  const auto A = out.matrix;
+  const int owned_dofs = out.owned_dofs;
+  const double k = settings_.stiffness, delta = settings_.thickness;
+  double energy = 0.0, penetration = 0.0;
+  long long pressing = 0;
+
+  // Self-contact springs.
+  for (const Pair& p : pairs_) {
+    if (p.col[0] < 0 || p.col[1] < 0 || p.col[2] < 0 || p.col[3] < 0)
+      throw std::logic_error("ContactTerm: a pair's node is not a column here (System::update_pattern not called)");
+    double g = 0.0;
+    for (int j = 0; j < 4; ++j)
+      for (int c = 0; c < 3; ++c) g += p.w[j] * p.normal[c] * (p.X[j][c] + u(p.col[j] + c));
+    if (g >= delta) continue;
+    const double s = delta - g, kA = k * p.area;
+    if (p.owner == rank_) {
+      energy += 0.5 * kA * s * s;
+      ++pressing;
+      penetration = std::max(penetration, -g);
+    }
+    for (int j = 0; j < 4; ++j) {
+      if (p.col[j] >= owned_dofs) continue;  // not a row of this rank
+      for (int c = 0; c < 3; ++c) {
+        const int row = p.col[j] + c;
+        if (in.want_force) f(row) -= kA * s * p.w[j] * p.normal[c];
+        if (in.want_matrix) {
+          int cols[12];
+          double vals[12];
+          for (int l = 0; l < 4; ++l)
+            for (int d = 0; d < 3; ++d) {
+              cols[3 * l + d] = p.col[l] + d;
+              vals[3 * l + d] = kA * p.w[j] * p.w[l] * p.normal[c] * p.normal[d];
+            }
+          A.sumIntoValues(row, cols, 12, vals, true, true);
+        }
+      }
+    }
+  }
+
+  // Colliders, on this rank's samples.
+  if (!colliders_.empty()) {
+    const auto& mesh = system_.mesh();
+    auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+    std::vector<Rigid> to_local(colliders_.size());
+    std::vector<Box> bounds(colliders_.size());
+    for (std::size_t c = 0; c < colliders_.size(); ++c) {
+      to_local[c] = poses_[c].inverse();
+      bounds[c] = colliders_[c].bounds(delta);
+    }
+    for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
+      const int n = owned_samples_[i];
+      const Vec x{X(n, 0) + u(3 * n), X(n, 1) + u(3 * n + 1), X(n, 2) + u(3 * n + 2)};
+      const double kA = k * surface_.area[sample_vertex_[i]];
+      for (std::size_t c = 0; c < colliders_.size(); ++c) {
+        const Vec xl = to_local[c].apply(x);
+        if (!bounds[c].contains(xl)) continue;
+        Vec gl;
+        const double phi = colliders_[c].distance(xl, gl);
+        if (phi >= delta) continue;
+        const Vec g = poses_[c].rotate(gl);
+        const double s = delta - phi;
+        energy += 0.5 * kA * s * s;
+        ++pressing;
+        penetration = std::max(penetration, -phi);
+        for (int a = 0; a < 3; ++a) {
+          if (in.want_force) f(3 * n + a) -= kA * s * g[a];
+          if (in.want_matrix) {
+            const int cols[3] = {3 * n, 3 * n + 1, 3 * n + 2};
+            const double vals[3] = {kA * g[a] * g[0], kA * g[a] * g[1], kA * g[a] * g[2]};
+            A.sumIntoValues(3 * n + a, cols, 3, vals, true, true);
+          }
+        }
+      }
+    }
+  }
+  out.totals.contact += energy;
+  out.totals.energy += energy;
+  out.totals.contacts += pressing;
+  out.totals.penetration = std::max(out.totals.penetration, penetration);
+}
+
+ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ContactDetection stats;
+  const Mesh& mesh = system_.mesh();
+  const MPI_Comm comm = raw_comm(*system_.comm());
+  pairs_.clear();
+  global_pairs_ = 0;
+  const std::vector<Chosen> previous = keep ? std::move(chosen_) : std::vector<Chosen>();
+  chosen_.clear();
+  if (!settings_.self) return stats;
+
+  // Current positions of the local nodes (owned and ghost), and of every surface vertex.
+  Vector overlap(system_.overlap_dofs());
+  overlap.doImport(u, Import(system_.owned_dofs(), system_.overlap_dofs()), Tpetra::INSERT);
+  auto uh = overlap.getLocalViewHost(Tpetra::Access::ReadOnly);
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto position = [&](int n) { return Vec{Xh(n, 0) + uh(3 * n, 0), Xh(n, 1) + uh(3 * n + 1, 0), Xh(n, 2) + uh(3 * n + 2, 0)}; };
+  struct Position {
+    int vertex;
+    double x[3];
+  };
+  std::vector<Position> mine;
+  for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
+    const Vec p = position(owned_samples_[i]);
+    mine.push_back({sample_vertex_[i], {p[0], p[1], p[2]}});
+  }
+  std::vector<Vec> x(surface_.vertices());
+  for (const Position& p : allgatherv(comm, mine)) x[p.vertex] = {p.x[0], p.x[1], p.x[2]};
+
+  const auto& T = surface_.triangles;
+  auto excluded = [&](int t, int v) {
+    for (int m : T[t])
+      if (surface_.in_ring(v, surface_.gid[m])) return true;
+    return false;
+  };
+  auto closest_deformed = [&](int t, const Vec& p, double w[3]) { return closest_on_triangle(p, x[T[t][0]], x[T[t][1]], x[T[t][2]], w); };
+
+  struct Candidate {
+    int vertex, kind;  // kind 0: inside (reference map), 1: proximity
+    int triangle;
+    double beta[3], normal[3], d2;
+    int refined;
+  };
+  std::vector<Candidate> found;
+
+  // Kept pairs (every rank decides the same from the replicated positions).
+  std::vector<char> paired(surface_.vertices(), 0);
+  std::vector<Candidate> kept;
+  for (const Chosen& c : previous) {
+    const Vec q = c.beta[0] * x[T[c.triangle][0]] + c.beta[1] * x[T[c.triangle][1]] + c.beta[2] * x[T[c.triangle][2]];
+    const Vec n{c.normal[0], c.normal[1], c.normal[2]};
+    if (dot(x[c.vertex] - q, n) > settings_.margin) continue;
+    paired[c.vertex] = 1;
+    kept.push_back({c.vertex, -1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0});
+  }
+
+  // Samples inside the deformed elements this rank owns.
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  const bool hex = mesh.type == ElementType::Hex8;
+  const int npe = nodes_per_element(mesh.type);
+  std::vector<Box> eboxes(mesh.n_owned_elements);
+  for (std::size_t e = 0; e < mesh.n_owned_elements; ++e)
+    for (int a = 0; a < npe; ++a) eboxes[e].add(position(conn(e, a)));
+  const AabbTree element_tree(eboxes);
+  for (std::size_t v = 0; v < surface_.vertices(); ++v) {
+    if (paired[v]) continue;
+    bool inside = false;
+    Vec Xref{};
+    element_tree.at_point(x[v], [&](int e) {
+      if (inside) return;
+      for (int a = 0; a < npe; ++a)
+        if (surface_.in_ring(static_cast<int>(v), mesh.node_gid[conn(e, a)])) return;
+      const int ntets = hex ? 6 : 1;
+      for (int k = 0; k < ntets && !inside; ++k) {
+        int nodes[4];
+        for (int a = 0; a < 4; ++a) nodes[a] = conn(e, hex ? kHexTets[k][a] : a);
+        double l[4];
+        if (!tet_barycentric(x[v], position(nodes[0]), position(nodes[1]), position(nodes[2]), position(nodes[3]), l)) continue;
+        if (l[0] < -1e-12 || l[1] < -1e-12 || l[2] < -1e-12 || l[3] < -1e-12) continue;
+        inside = true;
+        Xref = {0.0, 0.0, 0.0};
+        for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{Xh(nodes[a], 0), Xh(nodes[a], 1), Xh(nodes[a], 2)};
+      }
+    });
+    if (!inside) continue;
+    // The closest reference surface point away from the sample's ring, mapped back.
+    double best2 = 0.0, w[3];
+    int t = reference_tree_.closest(Xref, HUGE_VAL, [&](int k) {
+      if (excluded(k, static_cast<int>(v))) return HUGE_VAL;
+      double ww[3];
+      return distance2(Xref, closest_on_triangle(Xref, surface_.X[T[k][0]], surface_.X[T[k][1]], surface_.X[T[k][2]], ww));
+    }, best2);
+    if (t < 0) {
+      ++stats.unpaired;
+      continue;
+    }
+    closest_on_triangle(Xref, surface_.X[T[t][0]], surface_.X[T[t][1]], surface_.X[T[t][2]], w);
+    Vec q = w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]];
+    double d2 = distance2(x[v], q);
+    int refined = 0;
+    for (int iter = 0; settings_.refine && iter < 8; ++iter) {
+      int next = -1;
+      double nw[3] = {0, 0, 0};
+      for (int m : T[t])
+        for (int k = surface_.tri_offsets[m]; k < surface_.tri_offsets[m + 1]; ++k) {
+          const int t2 = surface_.vertex_tris[k];
+          if (t2 == t || excluded(t2, static_cast<int>(v))) continue;
+          double w2[3];
+          const double dd = distance2(x[v], closest_deformed(t2, x[v], w2));
+          if (dd < d2 * (1.0 - 1e-12)) {
+            d2 = dd;
+            next = t2;
+            std::copy(w2, w2 + 3, nw);
+          }
+        }
+      if (next < 0) break;
+      t = next;
+      std::copy(nw, nw + 3, w);
+      refined = 1;
+    }
+    // The spring's direction: from the sample out to the target point (the gradient of the distance,
+    // also right where the target lies on an edge or a corner), or the target's normal when the two
+    // points coincide or disagree about which side is out.
+    const Vec face = triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]]);
+    const Vec d = (w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]) - x[v];
+    const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;
+    found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined});
+  }
+
+  // This rank's samples near the deformed surface, outside it.
+  std::vector<Box> tboxes(T.size());
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int m : T[t]) tboxes[t].add(x[m]);
+  const AabbTree triangle_tree(tboxes);
+  const double margin = settings_.margin;
+  for (int v : sample_vertex_) {
+    if (paired[v]) continue;
+    int best = -1;
+    double best2 = margin * margin, bw[3] = {0, 0, 0};
+    triangle_tree.near(x[v], margin, [&](int t) {
+      if (excluded(t, v)) return;
+      double w[3];
+      const Vec q = closest_deformed(t, x[v], w);
+      const double dd = distance2(x[v], q);
+      if (dd >= best2) return;
+      if (dot(x[v] - q, triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]])) < 0.0) return;  // behind: inside
+      best = t;
+      best2 = dd;
+      std::copy(w, w + 3, bw);
+    });
+    if (best < 0) continue;
+    // From the target point out to the sample: the face normal for a point over the face, the
+    // perpendicular of the edge or the direction from the corner where the closest point is one.
+    const Vec q = bw[0] * x[T[best][0]] + bw[1] * x[T[best][1]] + bw[2] * x[T[best][2]];
+    const Vec n = norm(x[v] - q) > 1e-12 * margin ? normalized(x[v] - q) : triangle_normal(x[T[best][0]], x[T[best][1]], x[T[best][2]]);
+    found.push_back({v, 1, best, {bw[0], bw[1], bw[2]}, {n[0], n[1], n[2]}, best2, 0});
+  }
+
+  // Every rank sees every candidate and keeps one per sample (inside before proximity, then the
+  // nearest), the same choice everywhere.
+  std::vector<Candidate> all = allgatherv(comm, found);
+  all.insert(all.end(), kept.begin(), kept.end());  // kind -1: sorts first
+  std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.vertex != b.vertex) return a.vertex < b.vertex;
+    if (a.kind != b.kind) return a.kind < b.kind;
+    if (a.d2 != b.d2) return a.d2 < b.d2;
+    return a.triangle < b.triangle;
+  });
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (i > 0 && all[i].vertex == all[i - 1].vertex) continue;
+    const Candidate& c = all[i];
+    ++global_pairs_;
+    if (c.kind < 0)
+      ++stats.kept;
+    else
+      (c.kind == 0 ? stats.inside : stats.proximity) += 1;
+    stats.refined += c.refined;
+    chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}});
+    Pair p;
+    const int verts[4] = {c.vertex, T[c.triangle][0], T[c.triangle][1], T[c.triangle][2]};
+    bool here = false;
+    for (int j = 0; j < 4; ++j) {
+      p.node[j] = surface_.gid[verts[j]];
+      for (int d = 0; d < 3; ++d) p.X[j][d] = surface_.X[verts[j]][d];
+      p.w[j] = j == 0 ? 1.0 : -c.beta[j - 1];
+      p.col[j] = -1;
+      here = here || surface_.owner[verts[j]] == rank_;
+    }
+    if (!here) continue;
+    for (int d = 0; d < 3; ++d) p.normal[d] = c.normal[d];
+    p.area = surface_.area[c.vertex];
+    p.owner = surface_.owner[c.vertex];
+    pairs_.push_back(p);
+  }
+  long long unpaired = stats.unpaired;
+  MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  stats.added = stats.inside + stats.proximity;
+  columns_changed(*system_.column_dofs());
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+}  // namespace sinew

@@ -1,0 +1,54 @@
+// Colliders of a scene: shapes and their motions (scenes/contact.hpp).
+#include <sinew/core/collective.hpp>
+#include <sinew/scenes/contact.hpp>
+
+#include <memory>
+
+namespace sinew {
+
+Colliders::Colliders(const ContactParameters& p, const Skeleton& skeleton, const Teuchos::Comm<int>& comm,
+                     const std::string& where)
+    : skeleton_(skeleton) {
+  using Shape = ColliderParameters::Shape;
+  for (const auto& [name, c] : p.colliders) {
+    const std::string at = where + "/Colliders/" + name + ": ";
+    ColliderShape s;
+    switch (c.shape) {
+      case Shape::HalfSpace: s.kind = ColliderShape::Kind::HalfSpace; break;
+      case Shape::Sphere: s.kind = ColliderShape::Kind::Sphere; break;
+      case Shape::Capsule: s.kind = ColliderShape::Kind::Capsule; break;
+      case Shape::Cylinder: s.kind = ColliderShape::Kind::Cylinder; break;
+      case Shape::Mesh: s.kind = ColliderShape::Kind::Mesh; break;
+    }
+    s.point = c.point;
+    s.normal = c.normal;
+    s.center = c.center;
+    s.a = c.start;
+    s.b = c.end;
+    s.radius = c.radius;
+    // Every rank reads the surface (it is small) and they agree on failure, so none waits alone.
+    collectively(raw_comm(comm), [&] {
+      try {
+        if (c.shape == Shape::Mesh) s.surface = std::make_shared<TriangleSurface>(read_triangle_surface(c.surface));
+        s.prepare();
+      } catch (const InputError& e) {
+        throw e.prefixed(at);
+      }
+    });
+    int bone = -1;
+    if (!c.bone.empty()) {
+      for (std::size_t b = 0; b < skeleton.size(); ++b)
+        if (skeleton.name(b) == c.bone) bone = static_cast<int>(b);
+      if (bone < 0) throw InputError(at + "'Bone' \"" + c.bone + "\" is not a bone of the Skeleton");
+    }
+    shapes_.push_back(std::move(s));
+    tracks_.emplace_back(c.pivot, c.keyframes);
+    bone_.push_back(bone);
+  }
+}
+
+Rigid Colliders::pose(std::size_t k, double t) const {
+  return bone_[k] >= 0 ? skeleton_.transform(static_cast<std::size_t>(bone_[k]), t) : tracks_[k].pose(t);
+}
+
+}  // namespace sinew

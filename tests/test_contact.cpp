@@ -1,0 +1,388 @@
+// Contact (algebra/terms/contact.hpp): the penalty energy's gradient and Hessian against finite
+// differences, its Hessian PSD (LAPACK), colliders' signed distances against closed forms, two blocks
+// pressed together in equilibrium, a half-space and a mesh collider pushing back alike, a slab folded
+// onto itself by bones that does not cross itself (and does without contact), 1 thread = 2 threads =
+// 2 ranks.
+#include "scene_test_utils.hpp"
+#include "system_test_utils.hpp"
+
+#include <sinew/algebra/terms/contact.hpp>
+#include <sinew/core/parameters.hpp>
+#include <sinew/driver/run.hpp>
+#include <sinew/scenes/scene.hpp>
+
+#include <Tpetra_Core.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Vector.hpp>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace sinew;
+using namespace sinew::test;
+using geom::Vec;
+using geom::operator-;
+
+namespace {
+
+auto world() { return Tpetra::getDefaultComm(); }
+std::string tag() { return "_np" + std::to_string(world()->getSize()) + "_t" + std::to_string(Kokkos::DefaultExecutionSpace::concurrency()); }
+const std::string meshes = std::string(SINEW_SOURCE_DIR) + "/tests/meshes/";
+
+MaterialSpec snh(double E = 1000.0, double nu = 0.45) {
+  MaterialSpec s = material_defaults(MaterialModel::StableNeoHookean, 0.0, 0.0);
+  s.mu_L = E / (2 * (1 + nu));
+  s.lambda_L = E * nu / ((1 + nu) * (1 - 2 * nu));
+  s.projection = Projection::None;
+  return s;
+}
+
+Mesh two_blocks() {
+  MeshParameters p = default_section<MeshParameters>();
+  p.type = "file";
+  p.file = meshes + "two_blocks.msh";
+  return build_scene_mesh(p, *world());
+}
+
+// The term's own gradient, unconstrained.
+std::vector<double> term_force(const System& sys, const EnergyTerm& term, const Vector& u) {
+  auto f = sys.create_vector();
+  sys.gradient(u, *f, &term);
+  return gather(*f);
+}
+
+// The term's Hessian alone, as a dense matrix.
+std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u) {
+  auto K = sys.create_matrix();
+  Vector uc(sys.column_dofs());
+  uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
+  K->resumeFill();
+  K->setAllToScalar(0.0);
+  TermInput in;
+  auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
+  in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
+  in.want_matrix = true;
+  TermOutput out;
+  out.matrix = K->getLocalMatrixDevice();
+  out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
+  term.add(in, out);
+  K->fillComplete();
+  return dense(*K);
+}
+
+// The upper block pushed down by `push` (into the lower one when push > 0.1) with a small wiggle.
+void press(const System& sys, Vector& u, double push) {
+  set_displacement(sys, u, [&](const std::array<double, 3>& X, int c, long long gid) {
+    return (c == 2 && X[2] > 1.05 ? -push : 0.0) + 0.004 * hash_unit(gid, c);
+  });
+}
+
+}  // namespace
+
+// E, dE/du and d2E/du2 of the whole system with springs in place (elastic exact, so that finite
+// differences of the force see the same Hessian) along random directions, with samples both inside
+// the other block and near it; the pairs cross ranks on 2 ranks.
+TEST(Contact, SpringsHaveTheGradientAndHessianOfTheirEnergy) {
+  System sys(world(), two_blocks(), snh());
+  ContactSettings cs;
+  cs.stiffness = 2e4;
+  cs.thickness = 0.02;
+  cs.margin = 0.2;
+  auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
+  sys.add_term(contact);
+  auto u = sys.create_vector();
+  press(sys, *u, 0.13);
+  const ContactDetection d = contact->detect(*u);
+  sys.update_pattern();
+  EXPECT_GT(d.inside, 10);
+  EXPECT_GT(contact->global_pairs(), 40);
+  auto f = sys.create_vector();
+  auto K = sys.create_matrix();
+  const auto t = sys.evaluate(*u, f.get(), K.get(), Backend::Default, Projection::None);
+  EXPECT_GT(t.contact, 0.0);
+  EXPECT_GT(t.contacts, 10);
+  EXPECT_GT(t.penetration, 0.0);
+  auto dir = sys.create_vector(), up = sys.create_vector(), um = sys.create_vector(), fp = sys.create_vector(),
+       fm = sys.create_vector(), Kd = sys.create_vector();
+  for (int trial = 0; trial < 3; ++trial) {
+    set_displacement(sys, *dir, [&](const std::array<double, 3>&, int c, long long gid) { return hash_unit(gid, c, 7 + trial); });
+    const double eps = 1e-6;
+    up->update(1.0, *u, eps, *dir, 0.0);
+    um->update(1.0, *u, -eps, *dir, 0.0);
+    const double slope = (sys.evaluate(*up, fp.get(), nullptr).energy - sys.evaluate(*um, fm.get(), nullptr).energy) / (2 * eps);
+    EXPECT_NEAR(slope, f->dot(*dir), 1e-6 * std::max(1.0, std::fabs(slope)));
+    K->apply(*dir, *Kd);
+    fp->update(-1.0, *fm, 1.0);
+    fp->scale(1.0 / (2 * eps));
+    fp->update(-1.0, *Kd, 1.0);
+    EXPECT_LT(fp->normInf(), 1e-5 * Kd->normInf()) << "trial " << trial;
+  }
+  // The springs' own Hessian is positive semi-definite, and so is the whole projected one.
+  const auto H = term_hessian(sys, *contact, *u);
+  EXPECT_GT(max_abs(H), 0.0);
+  EXPECT_GT(min_eigenvalue(H), -1e-10 * max_abs(H));
+  // Each spring's forces sum to zero (beta sums to 1): contact pushes the blocks apart, not the body.
+  const auto fc = term_force(sys, *contact, *u);
+  double sum[3] = {0, 0, 0}, scale = 0.0;
+  for (std::size_t k = 0; k < fc.size(); ++k) {
+    sum[k % 3] += fc[k];
+    scale = std::max(scale, std::fabs(fc[k]));
+  }
+  for (double s : sum) EXPECT_LT(std::fabs(s), 1e-12 * fc.size() * scale);
+}
+
+// Signed distances and their gradients against closed forms: outside and inside, near edges and
+// corners of a mesh box (the pseudo-normals' business), moved by a pose.
+TEST(Contact, CollidersKnowTheirSignedDistance) {
+  ColliderShape sphere;
+  sphere.kind = ColliderShape::Kind::Sphere;
+  sphere.center = {1, 2, 3};
+  sphere.radius = 0.5;
+  ColliderShape capsule;
+  capsule.kind = ColliderShape::Kind::Capsule;
+  capsule.a = {0, 0, 0};
+  capsule.b = {0, 0, 2};
+  capsule.radius = 0.25;
+  ColliderShape cylinder = capsule;
+  cylinder.kind = ColliderShape::Kind::Cylinder;
+  // A closed box [0, 1]^3 as twelve outward triangles.
+  auto box = std::make_shared<TriangleSurface>();
+  for (int k = 0; k < 8; ++k) box->vertices.push_back({double(k & 1), double((k >> 1) & 1), double((k >> 2) & 1)});
+  box->triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                    {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  box->lower = {0, 0, 0};
+  box->upper = {1, 1, 1};
+  ColliderShape mesh;
+  mesh.kind = ColliderShape::Kind::Mesh;
+  mesh.surface = box;
+  for (auto* c : {&sphere, &capsule, &cylinder, &mesh}) c->prepare();
+  auto box_distance = [](const Vec& p) {
+    Vec q;
+    double inside = HUGE_VAL;
+    for (int i = 0; i < 3; ++i) {
+      q[i] = std::clamp(p[i], 0.0, 1.0);
+      inside = std::min({inside, p[i], 1.0 - p[i]});
+    }
+    const double out = geom::norm(p - q);
+    return out > 0.0 ? out : -inside;
+  };
+  for (int k = 0; k < 400; ++k) {
+    const Vec p{3 * hash_unit(k, 0, 3), 3 * hash_unit(k, 1, 3), 3 * hash_unit(k, 2, 3)};
+    Vec g;
+    EXPECT_NEAR(sphere.distance(p, g), geom::norm(p - sphere.center) - 0.5, 1e-14);
+    const double zc = std::clamp(p[2], 0.0, 2.0);
+    EXPECT_NEAR(capsule.distance(p, g), std::hypot(p[0], p[1], p[2] - zc) - 0.25, 1e-14);
+    EXPECT_NEAR(cylinder.distance(p, g), std::hypot(p[0], p[1]) - 0.25, 1e-14);
+    const Vec pb{0.5 + 0.8 * hash_unit(k, 0, 5), 0.5 + 0.8 * hash_unit(k, 1, 5), 0.5 + 0.8 * hash_unit(k, 2, 5)};
+    const double phi = mesh.distance(pb, g);
+    EXPECT_NEAR(phi, box_distance(pb), 1e-12) << pb[0] << " " << pb[1] << " " << pb[2];
+    // The gradient is the derivative of the distance (away from the box's medial surfaces).
+    const double h = 1e-7;
+    for (int i = 0; i < 3; ++i) {
+      Vec a = pb, b = pb, ga;
+      a[i] += h;
+      b[i] -= h;
+      const double fd = (mesh.distance(a, ga) - mesh.distance(b, ga)) / (2 * h);
+      if (std::fabs(box_distance(a) - box_distance(b) - 2 * h * g[i]) < 1e-9) EXPECT_NEAR(fd, g[i], 1e-5);
+    }
+  }
+  // Points just off an edge and a corner of the box: outside, whatever face is nearest.
+  Vec g;
+  EXPECT_NEAR(mesh.distance({1.001, 1.001, 0.5}, g), std::sqrt(2e-6), 1e-12);
+  EXPECT_NEAR(mesh.distance({-0.001, -0.001, -0.001}, g), std::sqrt(3e-6), 1e-12);
+  EXPECT_NEAR(mesh.distance({0.999, 0.999, 0.5}, g), -0.001, 1e-12);
+}
+
+namespace {
+
+// A 4 x 4 x 4 hex cube [0, 1]^3 whose top is pushed down by 0.3 onto a collider below it.
+std::string pushed_block(const std::string& collider, double tol = 1e-9) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="pushed"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Elements" type="Array(int)" value="{4, 4, 4}"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1000.0"/>
+    <Parameter name="Poisson ratio" type="double" value="0.4"/>
+  </ParameterList>
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value="3"/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="top">
+        <Parameter name="Region" type="string" value="face z+"/>
+        <Parameter name="Motion" type="string" value="translate"/>
+        <Parameter name="Displacement" type="Array(double)" value="{0, 0, -0.3}"/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Contact">
+    <ParameterList name="Colliders">
+      <ParameterList name="below">)x" + collider + R"x(</ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Solver">
+    <Parameter name="Absolute tolerance" type="double" value=")x" + format_number(tol) + R"x("/>
+  </ParameterList>
+  <ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value="false"/>
+    <Parameter name="Surface OBJ" type="bool" value="false"/>
+    <Parameter name="Checkpoint every" type="int" value="0"/>
+  </ParameterList>
+</ParameterList>)x";
+}
+
+// The sum over the nodes of a boundary condition of the unconstrained gradient's component c: minus
+// the force the condition exerts on the body (the reaction is -this).
+double condition_force(Simulation& sim, const std::string& name, int c, const EnergyTerm* only = nullptr) {
+  const System& sys = sim.scene().system();
+  auto f = sys.create_vector();
+  sys.gradient(sim.displacement(), *f, only);
+  auto v = f->getLocalViewHost(Tpetra::Access::ReadOnly);
+  double local = 0.0, global = 0.0;
+  for (const auto& bc : sim.scene().boundary_conditions())
+    if (bc.name == name)
+      for (int n : bc.nodes)
+        if (static_cast<std::size_t>(n) < sys.mesh().n_owned_nodes) local += v(3 * n + c, 0);
+  Teuchos::reduceAll(*sys.comm(), Teuchos::REDUCE_SUM, local, Teuchos::outArg(global));
+  return global;
+}
+
+double term_total(Simulation& sim, const EnergyTerm& term, int c) {
+  const auto f = term_force(sim.scene().system(), term, sim.displacement());
+  double s = 0.0;
+  for (std::size_t k = c; k < f.size(); k += 3) s += f[k];
+  return s;
+}
+
+}  // namespace
+
+// A block pushed onto a half-space and onto a closed mesh box whose top is the same plane: the same
+// state, the same reaction, and it equals the collider's push on the block.
+TEST(Contact, AHalfSpaceAndAMeshColliderPushBackAlike) {
+  const std::string dir = "test_results/contact_colliders" + tag();
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream obj(dir + "/slab.obj");
+    for (int k = 0; k < 8; ++k) obj << "v " << (k & 1 ? 3 : -2) << " " << ((k >> 1) & 1 ? 3 : -2) << " " << ((k >> 2) & 1 ? -0.1 : -1.1) << "\n";
+    obj << "f 1 3 2\nf 2 3 4\nf 5 6 7\nf 6 8 7\nf 1 2 5\nf 2 6 5\nf 3 7 4\nf 4 7 8\nf 1 5 3\nf 3 5 7\nf 2 4 6\nf 4 8 6\n";
+  }
+  const std::string half = R"x(<Parameter name="Shape" type="string" value="half-space"/>
+        <Parameter name="Point" type="Array(double)" value="{0, 0, -0.1}"/>)x";
+  const std::string mesh = R"x(<Parameter name="Shape" type="string" value="mesh"/>
+        <Parameter name="Surface" type="string" value=")x" + dir + "/slab.obj" + R"x("/>)x";
+  Simulation a(config(pushed_block(half), dir + "/half"), RunOptions{true, ""});
+  Simulation b(config(pushed_block(mesh), dir + "/mesh"), RunOptions{true, ""});
+  ASSERT_EQ(a.run(), 0);
+  ASSERT_EQ(b.run(), 0);
+  const double ra = condition_force(a, "top", 2), rb = condition_force(b, "top", 2);
+  // The body is pressed: the top pushes down with about E x strain over the area (0.2 after the 0.1 gap).
+  EXPECT_GT(-ra, 100.0);
+  EXPECT_NEAR(ra, rb, 1e-9 * std::fabs(ra));
+  EXPECT_LT(rel_diff(gather(a.displacement()), gather(b.displacement())), 1e-9);
+  // Equilibrium: the collider pushes the body up as hard as the top pushes it down (1e-6 relative).
+  // In gradients: the body's elastic gradient sums to zero, so the contact term's equals the top's.
+  for (Simulation* s : {&a, &b}) {
+    const double contact = term_total(*s, *s->scene().contact(), 2);
+    EXPECT_NEAR(contact, ra, 1e-6 * std::fabs(ra));
+    EXPECT_LT(s->records().back().totals.penetration, s->scene().contact()->settings().thickness);
+  }
+}
+
+namespace {
+
+std::string blocks_xml(double push, bool self, int steps = 4) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="blocks"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="file"/>
+    <Parameter name="File" type="string" value=")x" + meshes + R"x(two_blocks.msh"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1000.0"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value=")x" + std::to_string(steps) + R"x("/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="bottom">
+        <Parameter name="Region" type="string" value="group bottom"/>
+      </ParameterList>
+      <ParameterList name="top">
+        <Parameter name="Region" type="string" value="group top"/>
+        <Parameter name="Motion" type="string" value="translate"/>
+        <Parameter name="Displacement" type="Array(double)" value="{0.02, 0.01, -)x" + std::to_string(push) + R"x(}"/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Contact">
+    <Parameter name="Self contact" type="bool" value=")x" + (self ? "true" : "false") + R"x("/>
+  </ParameterList>
+  <ParameterList name="Solver">
+    <Parameter name="Absolute tolerance" type="double" value="1.0e-9"/>
+  </ParameterList>
+  <ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value="false"/>
+    <Parameter name="Surface OBJ" type="bool" value="false"/>
+    <Parameter name="Checkpoint every" type="int" value="0"/>
+  </ParameterList>
+</ParameterList>)x";
+}
+
+}  // namespace
+
+// Two cubes 0.1 apart, the upper pushed down by 0.4 (and a little sideways): they meet and do not pass
+// through each other; the force the top exerts reaches the bottom through the springs only (1e-6);
+// the same end state on 1 thread, 2 threads and 2 ranks.
+TEST(Contact, TwoBlocksPressedTogetherPushEachOtherBack) {
+  Simulation sim(config(blocks_xml(0.4, true), "test_results/contact_blocks" + tag()), RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const auto& last = sim.records().back();
+  const ContactTerm& contact = *sim.scene().contact();
+  EXPECT_GT(last.totals.contacts, 20);
+  EXPECT_LT(last.totals.penetration, contact.settings().thickness);
+  const double top = condition_force(sim, "top", 2), bottom = condition_force(sim, "bottom", 2);
+  // Gradients at the prescribed faces (the reactions are their negatives): the top pushes down, the
+  // bottom holds up as much.
+  EXPECT_LT(top, -100.0);
+  EXPECT_NEAR(bottom, -top, 1e-6 * std::fabs(top));
+  // The springs push the upper block (its nodes: reference z > 1.05) up as hard as its top pushes it
+  // down: the contact term's gradient over the block equals the top's (the elastic one sums to zero).
+  const System& sys = sim.scene().system();
+  const auto fc = term_force(sys, contact, sim.displacement());
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  double upper_local = 0.0, upper = 0.0;
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n)
+    if (X(n, 2) > 1.05) {
+      auto v = sim.displacement().getMap()->getGlobalElement(static_cast<LO>(3 * n + 2));
+      upper_local += fc[static_cast<std::size_t>(v)];
+    }
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, upper_local, Teuchos::outArg(upper));
+  EXPECT_NEAR(upper, top, 1e-6 * std::fabs(top));
+  agree_with_reference(gather(sim.displacement()), world()->getRank(), 1e-6);
+}
+
+// Without contact the same push drives the upper block through the lower one: the test above can fail.
+TEST(Contact, WithoutContactTheBlocksPassThroughEachOther) {
+  Simulation sim(config(blocks_xml(0.4, false, 2), "test_results/contact_blocks_off" + tag()), RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const auto u = gather(sim.displacement());
+  const Mesh& m = sim.scene().system().mesh();
+  // The lowest point of the upper block ends below the highest point of the lower one.
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
+  double low = HUGE_VAL, high = -HUGE_VAL;
+  for (std::size_t n = 0; n < m.n_owned_nodes; ++n) {
+    const double z = X(n, 2) + u[3 * static_cast<std::size_t>(m.node_gid[n]) + 2];
+    if (X(n, 2) > 1.05)
+      low = std::min(low, z);
+    else
+      high = std::max(high, z);
+  }
+  double glow = 0.0, ghigh = 0.0;
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_MIN, low, Teuchos::outArg(glow));
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_MAX, high, Teuchos::outArg(ghigh));
+  EXPECT_LT(glow, ghigh - 0.2);
+}
