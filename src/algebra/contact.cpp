@@ -171,6 +171,7 @@ ContactTerm::ContactTerm(const System& system, const ContactSettings& settings, 
   owned_samples_ = local_boundary(system.mesh()).owned_vertices;
   for (int n : owned_samples_) sample_vertex_.push_back(surface_.vertex_of(system.mesh().node_gid[n]));
   for (auto& c : colliders_) c.prepare();
+  collider_lambda_.assign(owned_samples_.size() * colliders_.size(), 0.0);
 }
 
 void ContactTerm::columns_changed(const Map& columns) {
@@ -223,8 +224,10 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
     double g = 0.0;
     for (int j = 0; j < 4; ++j)
       for (int c = 0; c < 3; ++c) g += p.w[j] * p.normal[c] * (p.X[j][c] + u(p.col[j] + c));
-    if (g >= delta) continue;
-    const double s = delta - g, kA = k * p.area;
+    // s: the spring's stretch, its traction k s = max(0, lambda + k (delta - g)).
+    const double s = p.lambda / k + delta - g, kA = k * p.area;
+    if (p.owner == rank_) energy -= 0.5 * p.area * p.lambda * p.lambda / k;
+    if (s <= 0.0) continue;
     if (p.owner == rank_) {
       energy += 0.5 * kA * s * s;
       ++pressing;
@@ -265,12 +268,14 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
       const double kA = k * surface_.area[sample_vertex_[i]];
       for (std::size_t c = 0; c < colliders_.size(); ++c) {
         const Vec xl = to_local[c].apply(x);
-        if (!bounds[c].contains(xl)) continue;
+        const double lambda = collider_lambda_[i * colliders_.size() + c];
+        energy -= 0.5 * surface_.area[sample_vertex_[i]] * lambda * lambda / k;
+        if (!bounds[c].contains(xl) && lambda == 0.0) continue;
         Vec gl;
         const double phi = colliders_[c].distance(xl, gl);
-        if (phi >= delta) continue;
+        const double s = lambda / k + delta - phi;
+        if (s <= 0.0) continue;
         const Vec g = poses_[c].rotate(gl);
-        const double s = delta - phi;
         energy += 0.5 * kA * s * s;
         ++pressing;
         penetration = std::max(penetration, -phi);
@@ -296,18 +301,44 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   ContactDetection stats;
   const Mesh& mesh = system_.mesh();
   const MPI_Comm comm = raw_comm(*system_.comm());
-  pairs_.clear();
-  global_pairs_ = 0;
-  const std::vector<Chosen> previous = keep ? std::move(chosen_) : std::vector<Chosen>();
-  chosen_.clear();
-  if (!settings_.self) return stats;
-
-  // Current positions of the local nodes (owned and ghost), and of every surface vertex.
+  const double k = settings_.stiffness, delta = settings_.thickness;
+  // Current positions of the local nodes (owned and ghost).
   Vector overlap(system_.overlap_dofs());
   overlap.doImport(u, Import(system_.owned_dofs(), system_.overlap_dofs()), Tpetra::INSERT);
   auto uh = overlap.getLocalViewHost(Tpetra::Access::ReadOnly);
   auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
   auto position = [&](int n) { return Vec{Xh(n, 0) + uh(3 * n, 0), Xh(n, 1) + uh(3 * n + 1, 0), Xh(n, 2) + uh(3 * n + 2, 0)}; };
+
+  // Colliders: a sample still behind a collider by more than a tenth of the thickness gets its traction
+  // raised (Uzawa).
+  long long raised = 0;
+  if (keep && !colliders_.empty()) {
+    for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
+      const Vec x = position(owned_samples_[i]);
+      for (std::size_t c = 0; c < colliders_.size(); ++c) {
+        const Vec xl = poses_[c].inverse().apply(x);
+        if (!colliders_[c].bounds(delta).contains(xl)) continue;
+        Vec gl;
+        const double phi = colliders_[c].distance(xl, gl);
+        double& lambda = collider_lambda_[i * colliders_.size() + c];
+        if (phi < -0.1 * delta) {
+          lambda = std::max(0.0, lambda + k * (delta - phi));
+          ++raised;
+        }
+      }
+    }
+  }
+  MPI_Allreduce(&raised, &stats.raised, 1, MPI_LONG_LONG, MPI_SUM, comm);
+
+  pairs_.clear();
+  global_pairs_ = 0;
+  const std::vector<Chosen> last = std::move(chosen_);
+  chosen_.clear();
+  const std::vector<Chosen> previous = keep ? last : std::vector<Chosen>();
+  if (!settings_.self) {
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return stats;
+  }
   struct Position {
     int vertex;
     double x[3];
@@ -329,23 +360,36 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   auto closest_deformed = [&](int t, const Vec& p, double w[3]) { return closest_on_triangle(p, x[T[t][0]], x[T[t][1]], x[T[t][2]], w); };
 
   struct Candidate {
-    int vertex, kind;  // kind 0: inside (reference map), 1: proximity
+    int vertex, kind;  // kind 0: inside (reference map), 1: kept from the last pass, 2: proximity
     int triangle;
     double beta[3], normal[3], d2;
     int refined;
+    double lambda;
   };
   std::vector<Candidate> found;
 
   // Kept pairs (every rank decides the same from the replicated positions).
+  // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
+  // inside test cannot tell it more).
   std::vector<char> paired(surface_.vertices(), 0);
   std::vector<Candidate> kept;
   for (const Chosen& c : previous) {
     const Vec q = c.beta[0] * x[T[c.triangle][0]] + c.beta[1] * x[T[c.triangle][1]] + c.beta[2] * x[T[c.triangle][2]];
     const Vec n{c.normal[0], c.normal[1], c.normal[2]};
-    if (dot(x[c.vertex] - q, n) > settings_.margin) continue;
-    paired[c.vertex] = 1;
-    kept.push_back({c.vertex, -1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0});
+    const double g = dot(x[c.vertex] - q, n);
+    if (g > settings_.margin) continue;
+    paired[c.vertex] = g < 0.0 ? 2 : 1;
+    double lambda = c.lambda;
+    if (g < -0.1 * delta) {  // Uzawa: the traction that would have held it at the thickness
+      lambda = std::max(0.0, lambda + k * (delta - g));
+      ++stats.raised;
+    }
+    kept.push_back({c.vertex, 1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0, lambda});
   }
+  // A sample paired again after a fresh start carries its traction.
+  std::vector<double> carried(surface_.vertices(), 0.0);
+  if (!keep)
+    for (const Chosen& c : last) carried[c.vertex] = c.lambda;
 
   // Samples inside the deformed elements this rank owns.
   auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
@@ -355,8 +399,10 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   for (std::size_t e = 0; e < mesh.n_owned_elements; ++e)
     for (int a = 0; a < npe; ++a) eboxes[e].add(position(conn(e, a)));
   const AabbTree element_tree(eboxes);
+  // Every sample, kept pairs included: a kept spring whose target has slid away while its sample went
+  // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
-    if (paired[v]) continue;
+    if (paired[v] == 2) continue;
     bool inside = false;
     Vec Xref{};
     element_tree.at_point(x[v], [&](int e) {
@@ -417,7 +463,8 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     const Vec face = triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]]);
     const Vec d = (w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]) - x[v];
     const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;
-    found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined});
+    found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined, carried[v]});
+    stats.deepest = std::max(stats.deepest, std::sqrt(d2));
   }
 
   // This rank's samples near the deformed surface, outside it.
@@ -446,29 +493,54 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     // perpendicular of the edge or the direction from the corner where the closest point is one.
     const Vec q = bw[0] * x[T[best][0]] + bw[1] * x[T[best][1]] + bw[2] * x[T[best][2]];
     const Vec n = norm(x[v] - q) > 1e-12 * margin ? normalized(x[v] - q) : triangle_normal(x[T[best][0]], x[T[best][1]], x[T[best][2]]);
-    found.push_back({v, 1, best, {bw[0], bw[1], bw[2]}, {n[0], n[1], n[2]}, best2, 0});
+    found.push_back({v, 2, best, {bw[0], bw[1], bw[2]}, {n[0], n[1], n[2]}, best2, 0, carried[v]});
   }
 
-  // Every rank sees every candidate and keeps one per sample (inside before proximity, then the
-  // nearest), the same choice everywhere.
+  // Every rank sees every candidate and chooses the same. A sample keeps all its kept pairs; an inside
+  // pair whose target triangle none of them has joins them (up to four: a sample in a crease is pushed
+  // by both sides, where one frozen plane would let it slip in past its target's edge); a sample with
+  // no kept pair takes its inside pair, or else its nearest proximity one.
   std::vector<Candidate> all = allgatherv(comm, found);
-  all.insert(all.end(), kept.begin(), kept.end());  // kind -1: sorts first
+  all.insert(all.end(), kept.begin(), kept.end());
   std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
     if (a.vertex != b.vertex) return a.vertex < b.vertex;
     if (a.kind != b.kind) return a.kind < b.kind;
     if (a.d2 != b.d2) return a.d2 < b.d2;
     return a.triangle < b.triangle;
   });
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    if (i > 0 && all[i].vertex == all[i - 1].vertex) continue;
-    const Candidate& c = all[i];
+  std::vector<Candidate> picked;
+  for (std::size_t i = 0; i < all.size();) {
+    std::size_t j = i;
+    while (j < all.size() && all[j].vertex == all[i].vertex) ++j;
+    const std::size_t first = picked.size();
+    for (std::size_t m = i; m < j; ++m)
+      if (all[m].kind == 1) picked.push_back(all[m]);
+    const bool has_kept = picked.size() > first;
+    if (all[i].kind == 0) {
+      // Inside, yet a kept spring on the same triangle thinks it outside: the triangle has turned
+      // since its normal was frozen. Refreeze it (the traction stays).
+      auto same = std::find_if(picked.begin() + static_cast<long>(first), picked.end(),
+                               [&](const Candidate& c) { return c.triangle == all[i].triangle; });
+      if (same != picked.end()) {
+        const double lambda = same->lambda;
+        *same = all[i];
+        same->lambda = lambda;
+        ++stats.refrozen;
+      } else if (picked.size() - first < 4) {
+        picked.push_back(all[i]);
+      }
+    }
+    if (!has_kept && picked.size() == first) picked.push_back(all[i]);
+    i = j;
+  }
+  for (const Candidate& c : picked) {
     ++global_pairs_;
-    if (c.kind < 0)
+    if (c.kind == 1)
       ++stats.kept;
     else
       (c.kind == 0 ? stats.inside : stats.proximity) += 1;
     stats.refined += c.refined;
-    chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}});
+    chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, c.lambda});
     Pair p;
     const int verts[4] = {c.vertex, T[c.triangle][0], T[c.triangle][1], T[c.triangle][2]};
     bool here = false;
@@ -482,12 +554,15 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     if (!here) continue;
     for (int d = 0; d < 3; ++d) p.normal[d] = c.normal[d];
     p.area = surface_.area[c.vertex];
+    p.lambda = c.lambda;
     p.owner = surface_.owner[c.vertex];
     pairs_.push_back(p);
   }
   long long unpaired = stats.unpaired;
   MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  stats.added = stats.inside + stats.proximity;
+  double deepest = stats.deepest;
+  MPI_Allreduce(&deepest, &stats.deepest, 1, MPI_DOUBLE, MPI_MAX, comm);
+  stats.added = stats.inside + stats.proximity + stats.refrozen;
   columns_changed(*system_.column_dofs());
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

@@ -156,23 +156,26 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
 SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress,
                               StepRecord& rec) {
   Scene& scene = *scene_;
-  if (!scene.self_contact()) return solver_->solve(trial, progress);
+  if (!scene.contact()) return solver_->solve(trial, progress);
   (void)t;
   SolveReport sum;
-  for (int round = 0; round < scene.contact_rounds(); ++round) {
+  for (int round = 0;; ++round) {
     // The first round pairs afresh at the step's first guess; later ones keep those pairs and add the
-    // samples the last solve pushed into contact, and end the step when there are none.
+    // samples the last solve pushed into contact. The step ends when a detection adds none, or after
+    // the scene's maximum of solves; either way the end state has been looked at.
     const ContactDetection d = scene.detect_contact(trial, round > 0);
     rec.seconds_contact += d.seconds;
     rec.contact_pairs = scene.contact()->global_pairs();
+    rec.inside_depth = d.deepest;
     ++rec.contact_rounds;
     if (talk_) {
-      std::printf("  contact round %d: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld targets refined%s), %.2f s\n",
+      std::printf("  contact round %d: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld targets refined%s), "
+                  "%lld tractions raised, %.2f s\n",
                   round + 1, rec.contact_pairs, d.kept, d.inside, d.proximity, d.refined,
-                  d.unpaired ? (", " + std::to_string(d.unpaired) + " unpaired").c_str() : "", d.seconds);
+                  d.unpaired ? (", " + std::to_string(d.unpaired) + " unpaired").c_str() : "", d.raised, d.seconds);
       std::fflush(stdout);
     }
-    if (round > 0 && d.added == 0) break;
+    if ((round > 0 && d.added + d.raised == 0) || round == scene.contact_rounds()) break;
     SolveReport r = solver_->solve(trial, progress);
     if (round > 0) r.accumulate(sum);
     sum = r;
@@ -208,8 +211,8 @@ void Simulation::print_step(const StepRecord& rec) const {
               rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search,
               contact_time(rec).c_str());
   if (rec.totals.contacts > 0 || rec.contact_pairs > 0)
-    std::printf("  contact: %lld pressing, deepest penetration %.3g, energy %.4g\n", rec.totals.contacts, rec.totals.penetration,
-                rec.totals.contact);
+    std::printf("  contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g\n",
+                rec.totals.contacts, rec.totals.penetration, rec.inside_depth, rec.totals.contact);
   std::fflush(stdout);
 }
 

@@ -181,7 +181,7 @@ void Scene::apply_load(double t, Vector& u) {
 
 ContactDetection Scene::detect_contact(const Vector& u, bool keep) {
   ContactDetection d;
-  if (!self_contact()) return d;
+  if (!contact_) return d;
   d = contact_->detect(u, keep);
   system_->update_pattern();
   return d;

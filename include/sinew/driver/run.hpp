@@ -48,8 +48,8 @@ class Simulation {
   // The first guess for load t (Dirichlet values set): u_ moved by the skinning predictor, or its
   // linear extrapolation through u_previous_ when that has the lower (finite) energy.
   void first_guess(double t, Vector& trial);
-  // Solves for the state at load t from trial; with self contact, rounds of detection and solve until a
-  // solve needs no Newton iteration (or the scene's maximum rounds).
+  // Solves for the state at load t from trial; with contact, rounds of detection (new pairs, raised
+  // tractions) and solve until a detection changes nothing (or the scene's maximum of solves).
   SolveReport solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
   void print_step(const StepRecord& rec) const;
   void print_summary() const;

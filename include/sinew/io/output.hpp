@@ -56,10 +56,11 @@ struct StepRecord {
   SolveReport solve;
   EvaluationTotals totals;
   double volume_ratio = 1.0;
-  // Self contact: detect-and-solve rounds, pairs after the last detection, seconds spent detecting.
+  // Self contact: detect-and-solve rounds, pairs after the last detection, seconds spent detecting, and
+  // the deepest a surface point lies inside the body at the end (from a detection of the end state).
   int contact_rounds = 0;
   long long contact_pairs = 0;
-  double seconds_contact = 0.0;
+  double seconds_contact = 0.0, inside_depth = 0.0;
 };
 
 // Where a run stands on its load path: everything a restart needs besides the displacement. Inside a

@@ -90,8 +90,9 @@ struct ContactParameters {
     v.entry("Refine targets", refine, true,
             "self contact: move each target to the closest point of the deformed surface nearby (the paper's local "
             "optimization)");
-    v.entry("Maximum rounds", rounds, 4,
-            "self contact: detect-and-solve rounds per step (a round after a solve that needed no Newton iteration ends it)",
+    v.entry("Maximum rounds", rounds, 10,
+            "solves per step: after each, new contacts are paired and the tractions of points still behind a surface "
+            "by more than a tenth of the thickness are raised (augmented Lagrangian); a step ends when nothing changes",
             Range::closed(1, 100));
     v.sections("Colliders", colliders, "one sublist per kinematic collider, named as you like");
   }

@@ -13,17 +13,22 @@
 //   - a sample outside but within `margin` of a surface triangle outside its ring is paired with the
 //     closest point, so that a contact about to close is resisted in the same solve.
 // Each pair keeps its target triangle (a, b, c), the barycentric weights beta of the target point and
-// the outward normal n of the target triangle at detection. Its energy is
-//   E = k A / 2 max(0, delta - g)^2,   g = n . (x_s - beta_a x_a - beta_b x_b - beta_c x_c),
-// with A the sample's reference area, k the stiffness (traction per unit of penetration) and delta the
-// contact thickness. For a frozen n and beta, E is a convex function of the twelve coordinates: its
-// Hessian k A (w (x) n)(w (x) n)^T, w = (1, -beta), is PSD and exact.
+// the outward normal n of the target triangle at detection. Its energy is the augmented-Lagrangian
+// penalty
+//   E = A / (2 k) (max(0, lambda + k (delta - g))^2 - lambda^2),   g = n . (x_s - beta_a x_a - beta_b x_b - beta_c x_c),
+// with A the sample's reference area, k the stiffness (traction per unit of penetration), delta the
+// contact thickness and lambda >= 0 a traction the pair carries: 0 gives the plain penalty k A/2
+// max(0, delta - g)^2; between solves a pair whose sample is still behind its target gets lambda +=
+// k (delta - g) (Uzawa), which drives penetration out without a stiffer, worse-conditioned penalty.
+// For a frozen n, beta and lambda, E is a convex function of the twelve coordinates: its Hessian
+// k A (w (x) n)(w (x) n)^T, w = (1, -beta), is PSD and exact.
 //
 // Colliders (kinematic: a half-space, a sphere, a capsule, an infinite cylinder, or a closed triangle
-// mesh, each at a pose set per step) act on every sample with E = k A / 2 max(0, delta - phi(x_s))^2, phi
-// the signed distance (positive outside); its Hessian k A (grad phi grad phi^T - (delta - phi) hess phi)
-// is projected to k A grad phi grad phi^T (the curvature part is negative semi-definite for convex
-// shapes, so this is the PSD projection; for a mesh collider it is the Gauss-Newton part).
+// mesh, each at a pose set per step) act on every sample with the same energy in g = phi(x_s), phi the
+// signed distance (positive outside), and a multiplier per sample and collider; the Hessian
+// k A (grad phi grad phi^T - (delta - phi + lambda / k) hess phi) is projected to k A grad phi grad phi^T
+// (the curvature part is negative semi-definite for convex shapes, so this is the PSD projection; for a
+// mesh collider it is the Gauss-Newton part).
 //
 // Across ranks: the surface (vertices, triangles, rings) is replicated; each rank locates samples in
 // the elements it owns and pairs its own samples by proximity; the pairs are gathered, and each rank
@@ -82,7 +87,10 @@ struct ContactDetection {
   long long refined = 0;    // inside pairs whose target moved in the local search
   long long unpaired = 0;   // inside samples with no admissible target
   long long kept = 0;       // pairs kept from the previous pass (keep mode)
-  long long added = 0;      // pairs that are new (every pair when not keeping)
+  long long refrozen = 0;   // kept pairs whose normal and target point were frozen again (their sample inside)
+  long long added = 0;      // pairs that are new or refrozen (every pair when not keeping)
+  long long raised = 0;     // multipliers raised for samples still behind their target (keep mode)
+  double deepest = 0.0;     // the largest distance from a sample inside the volume to the surface
   double seconds = 0.0;
 };
 
@@ -99,7 +107,10 @@ class ContactTerm final : public EnergyTerm {
   // Collective: self-contact pairs at displacement u (owned DOFs). Call System::update_pattern after.
   // With `keep`, the pairs of the last pass stay as they are (same target, weights and normal, so the
   // energy a converged state minimized does not move) while their gap is within the margin, and only
-  // samples without one are paired anew: the next round of a step adds what the last solve missed.
+  // samples without one are paired anew: the next round of a step adds what the last solve missed;
+  // and every spring (and collider contact) whose sample lies behind its target by more than a tenth
+  // of the thickness has its multiplier raised. Without `keep`, a sample paired again carries the
+  // multiplier it had.
   ContactDetection detect(const Vector& u, bool keep = false);
   void set_collider_pose(std::size_t k, const Rigid& pose) { poses_[k] = pose; }
   std::size_t colliders() const { return colliders_.size(); }
@@ -116,6 +127,7 @@ class ContactTerm final : public EnergyTerm {
     double X[4][3];    // reference positions of the four nodes
     double normal[3];  // outward normal of the target at detection
     double area;       // the sample's reference area
+    double lambda;     // augmented-Lagrangian traction (>= 0)
     int owner;         // the rank that owns the sample and counts the energy
     int col[4];        // column of each node's first DOF on this rank (-1: none)
   };
@@ -130,11 +142,12 @@ class ContactTerm final : public EnergyTerm {
   geom::AabbTree reference_tree_;  // of the reference surface triangles
   std::vector<int> owned_samples_;   // local owned nodes on the surface
   std::vector<int> sample_vertex_;   // ... their surface vertex
+  std::vector<double> collider_lambda_;  // per owned sample and collider (sample-major)
   std::vector<Pair> pairs_;
   // Every pair of the last pass, the same on every rank: sample vertex, target triangle, weights, normal.
   struct Chosen {
     int vertex, triangle;
-    double beta[3], normal[3];
+    double beta[3], normal[3], lambda;
   };
   std::vector<Chosen> chosen_;
   long long global_pairs_ = 0;
