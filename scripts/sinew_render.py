@@ -39,6 +39,9 @@ def parse_args(argv):
     p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
     p.add_argument("--skin", action="store_true",
                    help="draw the skin a voxelized mesh carries (skin_NNNNNN.obj) in flesh colour instead of the mesh")
+    p.add_argument("--cut", default=None, choices=["x", "y", "z"],
+                   help="cut the body in half by the plane through the middle of the run across this axis and show "
+                        "the far half's cut face (inside a crease: where flesh presses on flesh)")
     p.add_argument("--title", default=None, help="a title above the picture")
     p.add_argument("-o", "--output", default=None,
                    help="PNG file (default RESULTS/render_stepNNNNNN.png, or render_strip.png for several steps)")
@@ -195,7 +198,19 @@ def main(argv):
             d.Specular = 0.15
         else:
             at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)
-            moved = pv.Transform(Input=at)
+            body = at
+            if a.cut:  # keep the far half (coordinate above the middle of the run): its cut face looks at us
+                axis = "xyz".index(a.cut)
+                body = pv.Clip(Input=at)
+                body.ClipType = "Plane"
+                body.ClipType.Origin = list(0.5 * (lo + hi))
+                body.ClipType.Normal = [1.0 if k == axis else 0.0 for k in range(3)]
+                body.Invert = 0
+                try:
+                    body.Exact = 1
+                except AttributeError:
+                    pass
+            moved = pv.Transform(Input=body)
             moved.Transform.Translate = shift
             surface = pv.ExtractSurface(Input=moved)
             d = pv.Show(surface, view)

@@ -121,6 +121,17 @@ std::string describe(const SceneConfig& c) {
       os << "  " << name << ": " << b.region.region << (b.parent.empty() ? "" : ", child of " + b.parent) << ", "
          << b.keyframes.size() << " keyframes\n";
   }
+  if (p.contact.active()) {
+    os << "contact: self contact " << (p.contact.self ? "on" : "off") << ", " << p.contact.colliders.size() << " collider"
+       << (p.contact.colliders.size() == 1 ? "" : "s") << "\n";
+    for (const auto& [name, c] : p.contact.colliders) {
+      static const char* shapes[] = {"half-space", "sphere", "capsule", "cylinder", "mesh"};
+      os << "  " << name << ": " << shapes[static_cast<int>(c.shape)]
+         << (c.bone.empty() ? (c.keyframes.empty() ? ", fixed" : ", " + std::to_string(c.keyframes.size()) + " keyframes")
+                            : ", on bone " + c.bone)
+         << "\n";
+    }
+  }
   os << "solver: |F| < " << p.solver.absolute_tolerance << ", at most " << p.solver.max_iterations
      << " Newton iterations, line search " << p.solver.line_search << " on the " << p.solver.merit << ", CG with "
      << p.solver.preconditioner << "\n";

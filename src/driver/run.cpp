@@ -163,7 +163,9 @@ SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(
     // The first round pairs afresh at the step's first guess; later ones keep those pairs and add the
     // samples the last solve pushed into contact. The step ends when a detection adds none, or after
     // the scene's maximum of solves; either way the end state has been looked at.
+    const unsigned version = scene.system().pattern_version();
     const ContactDetection d = scene.detect_contact(trial, round > 0);
+    rec.pattern_changes += scene.system().pattern_version() != version;
     rec.seconds_contact += d.seconds;
     rec.contact_pairs = scene.contact()->global_pairs();
     rec.inside_depth = d.deepest;

@@ -166,7 +166,7 @@ Output::Output(const OutputParameters& params, const System& system, const std::
                "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
                "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
                "seconds_total,elastic_energy,external_energy,contact_energy,contacts,penetration,contact_pairs,"
-               "contact_rounds,seconds_contact,inside_depth");
+               "contact_rounds,seconds_contact,inside_depth,pattern_changes");
       open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
                "step,load,iteration,residual,cg_iterations,step_length,exact_hessian");
     });
@@ -320,7 +320,7 @@ void Output::log(const StepRecord& r) {
        << r.volume_ratio << "," << r.totals.min_J << "," << r.totals.inverted << "," << s.seconds_assembly << ","
        << s.seconds_preconditioner << "," << s.seconds_linear << "," << s.seconds_line_search << "," << s.seconds_total
        << "," << r.totals.elastic << "," << r.totals.external << "," << r.totals.contact << "," << r.totals.contacts << ","
-       << r.totals.penetration << "," << r.contact_pairs << "," << r.contact_rounds << "," << r.seconds_contact << "," << r.inside_depth << "\n";
+       << r.totals.penetration << "," << r.contact_pairs << "," << r.contact_rounds << "," << r.seconds_contact << "," << r.inside_depth << "," << r.pattern_changes << "\n";
   log_.flush();
 }
 

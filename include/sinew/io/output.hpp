@@ -61,6 +61,7 @@ struct StepRecord {
   int contact_rounds = 0;
   long long contact_pairs = 0;
   double seconds_contact = 0.0, inside_depth = 0.0;
+  int pattern_changes = 0;  // times the matrix pattern grew for new contact couplings
 };
 
 // Where a run stands on its load path: everything a restart needs besides the displacement. Inside a

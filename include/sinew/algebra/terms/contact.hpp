@@ -88,7 +88,7 @@ struct ContactDetection {
   long long unpaired = 0;   // inside samples with no admissible target
   long long kept = 0;       // pairs kept from the previous pass (keep mode)
   long long refrozen = 0;   // kept pairs whose normal and target point were frozen again (their sample inside)
-  long long added = 0;      // pairs that are new or refrozen (every pair when not keeping)
+  long long added = 0;      // new pairs that push at once (inside, or nearer than the thickness), and refrozen ones
   long long raised = 0;     // multipliers raised for samples still behind their target (keep mode)
   double deepest = 0.0;     // the largest distance from a sample inside the volume to the surface
   double seconds = 0.0;
