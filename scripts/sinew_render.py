@@ -29,8 +29,9 @@ def parse_args(argv):
     p.add_argument("--steps", default="last",
                    help="which steps: 'last' (default), 'first', 'all', a comma list of step numbers, "
                         "or 'strip:N' for N steps evenly spread from the first to the last")
-    p.add_argument("--field", default="J", choices=["J", "energy_density", "displacement"],
-                   help="colour by this field (default J = det F: volume change)")
+    p.add_argument("--field", default="J", choices=["J", "energy_density", "displacement", "contact_pressure"],
+                   help="colour by this field (default J = det F: volume change; contact_pressure where the run "
+                        "had contact: where flesh presses on flesh or on a collider)")
     p.add_argument("--range", default=None, help="colour range 'lo,hi' (default: over the shown steps)")
     p.add_argument("--size", default="1200x900", help="picture size WxH in pixels (default 1200x900)")
     p.add_argument("--view", default="iso", choices=["iso", "x", "y", "z", "-x", "-y", "-z"],
@@ -115,6 +116,8 @@ def field_range(chosen, field):
     lo, hi = np.inf, -np.inf
     for _, _, f in chosen:
         with h5py.File(f, "r") as h:
+            if "/" + field not in h:
+                fail(f"{f} has no field '{field}' (contact_pressure needs a run with a Contact section)")
             v = h["/" + field][...]
         if v.ndim == 2:
             v = np.linalg.norm(v, axis=1)
@@ -217,7 +220,7 @@ def main(argv):
             d.Representation = "Surface With Edges" if a.edges else "Surface"
             if a.edges:
                 d.EdgeColor = [0.2, 0.2, 0.2]
-            pv.ColorBy(d, ("CELLS" if a.field != "displacement" else "POINTS", a.field))
+            pv.ColorBy(d, ("POINTS" if a.field in ("displacement", "contact_pressure") else "CELLS", a.field))
             d.LookupTable = lut
         if a.rest:
             rest = pv.Transform(Input=pv.ForceTime(Input=reader, ForcedTime=0.0, IgnorePipelineTime=1))
@@ -238,7 +241,8 @@ def main(argv):
             t.AmbientColor = t.DiffuseColor = [0.1, 0.1, 0.1]
             t.ColorArrayName = [None, ""]
     bar = pv.GetScalarBar(lut, view)
-    bar.Title = {"J": "J = det F", "energy_density": "energy density", "displacement": "|u|"}[a.field]
+    bar.Title = {"J": "J = det F", "energy_density": "energy density", "displacement": "|u|",
+                 "contact_pressure": "contact pressure"}[a.field]
     bar.ComponentTitle = ""
     bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
     bar.Visibility = 0 if a.skin else 1

@@ -362,6 +362,17 @@ TEST(Contact, TwoBlocksPressedTogetherPushEachOtherBack) {
     }
   Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, upper_local, Teuchos::outArg(upper));
   EXPECT_NEAR(upper, top, 1e-6 * std::fabs(top));
+  // The pressure the output writes: the springs' traction, which over the contact face carries the push
+  // (sum of pressure x area ~ the force, within the spread of the nodal areas).
+  sys.evaluate(sim.displacement(), nullptr, nullptr);
+  double carried_local = 0.0, carried = 0.0;
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n) {
+    const int v = contact.surface().vertex_of(sys.mesh().node_gid[n]);
+    if (v >= 0) carried_local += contact.pressure()[n] * contact.surface().area[v];
+  }
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, carried_local, Teuchos::outArg(carried));
+  EXPECT_GT(carried, 0.5 * std::fabs(top));
+  EXPECT_LT(carried, 2.0 * std::fabs(top));
   agree_with_reference(gather(sim.displacement()), world()->getRank(), 1e-6);
 }
 

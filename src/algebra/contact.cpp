@@ -208,6 +208,7 @@ void ContactTerm::couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) con
 }
 
 void ContactTerm::add(const TermInput& in, TermOutput& out) const {
+  pressure_.assign(system_.mesh().n_owned_nodes, 0.0);
   if (pairs_.empty() && colliders_.empty()) return;
   const auto u = in.u;
   const auto f = out.force;
@@ -232,6 +233,7 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
       energy += 0.5 * kA * s * s;
       ++pressing;
       penetration = std::max(penetration, -g);
+      pressure_[p.col[0] / 3] += k * s;
     }
     for (int j = 0; j < 4; ++j) {
       if (p.col[j] >= owned_dofs) continue;  // not a row of this rank
@@ -279,6 +281,7 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
         energy += 0.5 * kA * s * s;
         ++pressing;
         penetration = std::max(penetration, -phi);
+        pressure_[n] += k * s;
         for (int a = 0; a < 3; ++a) {
           if (in.want_force) f(3 * n + a) -= kA * s * g[a];
           if (in.want_matrix) {

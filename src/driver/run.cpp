@@ -204,6 +204,15 @@ void Simulation::first_guess(double t, Vector& trial) {
     trial.assign(*candidate);
 }
 
+void Simulation::write_step(int step, double load) {
+  Output::NodeFields fields;
+  if (ContactTerm* contact = scene_->contact()) {
+    scene_->system().evaluate(*u_, nullptr, nullptr);  // the pressure of this state
+    fields.emplace_back("contact_pressure", contact->pressure());
+  }
+  out_->write_step(step, load, *u_, fields);
+}
+
 void Simulation::print_step(const StepRecord& rec) const {
   if (!talk_) return;
   std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
@@ -242,7 +251,7 @@ int Simulation::run() {
   if (opt_.restart_file.empty()) {
     out.write_mesh();
     scene.initial_state(u);
-    out.write_step(0, 0.0, u);
+    write_step(0, 0.0);
   }
   const int n = scene.steps();
   for (int k = at_.step + 1; k <= n; ++k) {
@@ -251,7 +260,7 @@ int Simulation::run() {
     rec.load = static_cast<double>(k) / n;
     const StepOutcome outcome = advance(k, rec);
     if (outcome == StepOutcome::Failed) {
-      out.write_step(k, at_.load, u);
+      write_step(k, at_.load);
       return code(ExitCode::NoConvergence);
     }
     if (outcome == StepOutcome::Stopped) {
@@ -268,7 +277,7 @@ int Simulation::run() {
     rec.volume_ratio = rec.totals.volume / V0;
     out.log(rec);
     records_.push_back(rec);
-    if (k % out.every() == 0 || k == n) out.write_step(k, rec.load, u);
+    if (k % out.every() == 0 || k == n) write_step(k, rec.load);
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
     if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get());
     print_step(rec);

@@ -222,7 +222,7 @@ std::string Output::surface_file(int step) const {
   return os.str();
 }
 
-void Output::write_step(int step, double load, const Vector& u) {
+void Output::write_step(int step, double load, const Vector& u, const NodeFields& node_fields) {
   if (params_.surface && (step % (params_.every * params_.surface_every) == 0 || step == steps_)) {
     if (!surface_) surface_ = std::make_unique<BoundarySurface>(sys_.mesh(), *sys_.comm());
     std::ostringstream what;
@@ -255,9 +255,13 @@ void Output::write_step(int step, double load, const Vector& u) {
     write_rows(file, "/position", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, pos.data(), tmp);
     write_rows(file, "/J", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, J.data(), tmp);
     write_rows(file, "/energy_density", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, psi.data(), tmp);
+    for (const auto& [name, values] : node_fields)
+      write_rows(file, "/" + name, H5T_NATIVE_DOUBLE, m.global_nodes, 1, first_node, n_owned, values.data(), tmp);
     write_attribute(file, "load", load);
     write_attribute(file, "step", step);
   });
+  node_fields_.clear();
+  for (const auto& f : node_fields) node_fields_.push_back(f.first);
   written_.emplace_back(step, load);
   collectively(comm, [&] {
     if (root_) write_xdmf();
@@ -292,6 +296,7 @@ void Output::write_xdmf() const {
     attr("displacement", "Vector", "Node", m.global_nodes, 3, "/displacement");
     attr("J", "Scalar", "Cell", m.global_elements, 1, "/J");
     attr("energy_density", "Scalar", "Cell", m.global_elements, 1, "/energy_density");
+    for (const auto& name : node_fields_) attr(name.c_str(), "Scalar", "Node", m.global_nodes, 1, ("/" + name).c_str());
     x << "   </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";

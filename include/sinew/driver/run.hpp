@@ -52,6 +52,8 @@ class Simulation {
   // tractions) and solve until a detection changes nothing (or the scene's maximum of solves).
   SolveReport solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
   void print_step(const StepRecord& rec) const;
+  // Collective: the step file of the current state, with the contact pressure when there is contact.
+  void write_step(int step, double load);
   void print_summary() const;
 
   SceneConfig config_;

@@ -5,7 +5,7 @@
 //
 //   DIR/mesh.h5            /coordinates (nodes x 3, reference), /connectivity (elements x nodes)
 //   DIR/step_NNNNNN.h5     /position (x = X + u), /displacement, /J and /energy_density (per element),
-//                          attributes: load fraction, step
+//                          /contact_pressure (per node, with contact), attributes: load fraction, step
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
 //   DIR/skin_NNNNNN.obj    a voxelized mesh's input surface carried along by the lattice
@@ -88,8 +88,11 @@ class Output {
   int every() const { return params_.every; }
 
   void write_mesh();
-  // Collective: one step file and the XDMF index, and the surface when its turn has come.
-  void write_step(int step, double load, const Vector& u);
+  // Per owned node, a named scalar written beside the step's fields (e.g. contact pressure).
+  using NodeFields = std::vector<std::pair<std::string, std::vector<double>>>;
+  // Collective: one step file and the XDMF index, and the surface when its turn has come. Every step of
+  // a run must be given the same node fields (the XDMF index lists them for all).
+  void write_step(int step, double load, const Vector& u, const NodeFields& node_fields = {});
   // Path of the surface OBJ of a step.
   std::string surface_file(int step) const;
   // Rank 0 appends a row to log.csv.
@@ -120,6 +123,7 @@ class Output {
   int steps_ = 1;
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
+  std::vector<std::string> node_fields_;        // names of the extra node fields of the step files
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
   std::ofstream log_, newton_log_;

@@ -116,6 +116,9 @@ class ContactTerm final : public EnergyTerm {
   std::size_t colliders() const { return colliders_.size(); }
   const SurfaceMesh& surface() const { return surface_; }
   const ContactSettings& settings() const { return settings_; }
+  // Per owned node, the contact pressure (the springs' and colliders' traction on it, summed) of the
+  // last evaluation: zero off contact.
+  const std::vector<double>& pressure() const { return pressure_; }
   // Pairs kept on this rank and their global count.
   std::size_t local_pairs() const { return pairs_.size(); }
   long long global_pairs() const { return global_pairs_; }
@@ -152,6 +155,7 @@ class ContactTerm final : public EnergyTerm {
   std::vector<Chosen> chosen_;
   long long global_pairs_ = 0;
   int rank_ = 0;
+  mutable std::vector<double> pressure_;
 };
 
 }  // namespace sinew
