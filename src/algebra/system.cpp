@@ -155,6 +155,7 @@ void System::build_graph() {
   }
   graph->fillComplete(owned_dofs_, owned_dofs_);
   graph_ = graph;
+  if (mesh_graph_.is_null()) mesh_graph_ = graph;
   column_importer_ = Teuchos::rcp(new Import(owned_dofs_, column_dofs_));
   u_columns_ = Teuchos::rcp(new Vector(column_dofs_));
   if (fixed_.extent(0) != col_gids.size()) {
@@ -186,6 +187,63 @@ bool System::update_pattern() {
 }
 
 Teuchos::RCP<CrsMatrix> System::create_matrix() const { return Teuchos::rcp(new CrsMatrix(graph_)); }
+Teuchos::RCP<CrsMatrix> System::create_mesh_matrix() const { return Teuchos::rcp(new CrsMatrix(mesh_graph_)); }
+
+Teuchos::RCP<CrsMatrix> System::mass_matrix(bool lumped) const {
+  auto M = create_mesh_matrix();
+  M->resumeFill();
+  M->setAllToScalar(0.0);
+  auto local = M->getLocalMatrixHost();
+  const std::size_t n_owned = mesh_.n_owned_nodes;
+  if (lumped) {
+    for (std::size_t n = 0; n < n_owned; ++n)
+      for (int c = 0; c < 3; ++c) {
+        const LO row = static_cast<LO>(3 * n + c);
+        local.sumIntoValues(row, &row, 1, &nodal_mass_[n]);
+      }
+  } else {
+    auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
+    auto w = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), elements_.wdetJ);
+    const std::vector<double> rho = elastic_->element_density();
+    const bool hex = mesh_.type == ElementType::Hex8;
+    const int npe = nodes_per_element(mesh_.type), nqp = elements_.nqp;
+    for (std::size_t e = 0; e < mesh_.local_elements(); ++e) {
+      double Me[8][8] = {};
+      if (hex) {
+        for (int q = 0; q < nqp; ++q) {
+          double N[8];
+          Hex8::values(q, N);
+          for (int a = 0; a < 8; ++a)
+            for (int b = 0; b < 8; ++b) Me[a][b] += rho[e] * w(e * nqp + q) * N[a] * N[b];
+        }
+      } else {  // linear tet: int N_a N_b = V (1 + delta_ab) / 20, exactly
+        const double V = w(e);
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) Me[a][b] = rho[e] * V * (a == b ? 2.0 : 1.0) / 20.0;
+      }
+      for (int a = 0; a < npe; ++a) {
+        const int na = conn(e, a);
+        if (static_cast<std::size_t>(na) >= n_owned) continue;
+        for (int c = 0; c < 3; ++c) {
+          LO cols[8];
+          double vals[8];
+          for (int b = 0; b < npe; ++b) {
+            cols[b] = static_cast<LO>(3 * conn(e, b) + c);
+            vals[b] = Me[a][b];
+          }
+          local.sumIntoValues(static_cast<LO>(3 * na + c), cols, npe, vals);
+        }
+      }
+    }
+  }
+  M->fillComplete(owned_dofs_, owned_dofs_);
+  return M;
+}
+
+void System::elastic_hessian(const Vector& u, CrsMatrix& K) const {
+  if (K.getCrsGraph().get() != mesh_graph_.get()) throw std::logic_error("System::elastic_hessian: K must be on the mesh graph");
+  run(u, nullptr, &K, Backend::Default, std::nullopt, {}, elastic_.get(), true);
+}
 Teuchos::RCP<Vector> System::create_vector() const { return Teuchos::rcp(new Vector(owned_dofs_)); }
 
 void System::set_fixed_dofs(const std::vector<int>& overlap_dofs) {
@@ -258,7 +316,7 @@ void System::gradient(const Vector& u, Vector& force, const EnergyTerm* only) co
 
 EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
                              ElementFields<DeviceMemory> fields, const EnergyTerm* only, bool eliminate) const {
-  if (K && K->getCrsGraph().get() != graph_.get())
+  if (K && K->getCrsGraph().get() != graph_.get() && !(only == elastic_.get() && K->getCrsGraph().get() == mesh_graph_.get()))
     throw std::logic_error("System::evaluate: the matrix was made before the pattern changed (create_matrix again)");
   u_columns_->doImport(u, *column_importer_, Tpetra::INSERT);
   if (force) force->putScalar(0.0);

@@ -17,6 +17,8 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
   c.file = name;
   try {
     c.params = parse_section<SceneFileParameters>(*params, "the top-level list");
+    if (c.params.time.dynamic() && params->isSublist("Loading") && params->sublist("Loading").isParameter("Steps"))
+      throw InputError("Loading: 'Steps' does not apply to a dynamic run (Time/Frames and Substeps set the time steps)");
   } catch (const InputError& e) {
     throw e.prefixed(name + ": ");
   }
@@ -111,7 +113,15 @@ std::string describe(const SceneConfig& c) {
        << " x " << p.mesh.cells[2] << " cells\n";
   os << "material: " << describe(p.material.law.spec()) << "\n";
   for (const auto& [region, law] : p.material.regions) os << "  region " << region << ": " << describe(law.spec()) << "\n";
-  os << "loading: " << p.loading.steps << " step" << (p.loading.steps > 1 ? "s" : "") << ", "
+  if (p.time.dynamic()) {
+    static const char* names[] = {"quasi-static", "backward Euler", "implicit midpoint"};
+    os << "time: " << names[static_cast<int>(p.time.integrator)] << ", " << p.time.frames << " frames at "
+       << p.time.frame_rate << " per second, " << p.time.substeps << " substep" << (p.time.substeps > 1 ? "s" : "")
+       << " per frame (h = " << 1.0 / (p.time.frame_rate * p.time.substeps) << " s), " << (p.time.lumped ? "lumped" : "consistent")
+       << " mass\n";
+  }
+  os << "loading: " << (p.time.dynamic() ? p.time.steps() : p.loading.steps) << " step"
+     << ((p.time.dynamic() ? p.time.steps() : p.loading.steps) > 1 ? "s" : "") << ", "
      << p.loading.conditions.size() << " boundary condition" << (p.loading.conditions.size() == 1 ? "" : "s") << "\n";
   for (const auto& [name, bc] : p.loading.conditions)
     os << "  " << name << ": " << bc.region.region << ", components " << bc.components << "\n";

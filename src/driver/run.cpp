@@ -2,6 +2,7 @@
 // half on failure; progress lines, the log, step files and checkpoints follow every converged step.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/exit_codes.hpp>
+#include <sinew/driver/dynamics.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/driver/signals.hpp>
@@ -55,14 +56,18 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
     : config_(config), opt_(options), comm_(comm.is_null() ? Tpetra::getDefaultComm() : comm) {
   scene_ = std::make_unique<Scene>(config_.scene(), comm_);
   solver_ = std::make_unique<NonlinearSolver>(scene_->system(), config_.params.solver);
+  if (scene_->dynamic()) dynamics_ = std::make_unique<Dynamics>(*scene_);
   u_ = scene_->system().create_vector();
   u_previous_ = scene_->system().create_vector();
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {
-    at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get());
+    at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get(),
+                                  dynamics_ ? &dynamics_->velocity() : nullptr);
     restart_step = at_.step;
   }
-  out_ = std::make_unique<Output>(config_.params.output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
+  OutputParameters output = config_.params.output;
+  if (scene_->dynamic()) output.every *= scene_->time().substeps;  // Output/Every counts frames
+  out_ = std::make_unique<Output>(output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
   talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.
   auto comm_copy = comm_;
@@ -76,7 +81,16 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
 
 Simulation::~Simulation() = default;
 
+const Vector* Simulation::velocity() const { return dynamics_ ? &dynamics_->velocity() : nullptr; }
+
 void Simulation::set_stop_check(std::function<int()> check) { stop_check_ = std::move(check); }
+
+void Simulation::set_initial(const Vector& u, const Vector* velocity) {
+  if (!opt_.restart_file.empty()) throw std::logic_error("Simulation::set_initial: not with a restart");
+  u_->assign(u);
+  if (velocity && dynamics_) dynamics_->velocity().assign(*velocity);
+  initial_given_ = true;
+}
 
 void Simulation::print_header() const {
   const System& sys = scene_->system();
@@ -105,13 +119,20 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   auto trial = scene.system().create_vector();
   while (at_.load < target - 1e-14) {
     const double t = std::min(at_.load + dt, target);
-    first_guess(t, *trial);
+    if (dynamics_)
+      dynamics_->begin(at_.load, t, *u_, *trial);
+    else
+      first_guess(t, *trial);
     if (talk_) {
       const double done = at_.load - start_load_, elapsed = wall_seconds() - started_;
       std::string eta;
       if (done > 1e-12 && elapsed > 1.0) eta = ", ~" + duration(elapsed / done * (1.0 - at_.load)) + " left";
-      std::printf("step %d/%d  load %.4g%s  (%s elapsed%s)\n", k, n, t, rec.cuts ? "  (after cutting the increment)" : "",
-                  duration(elapsed).c_str(), eta.c_str());
+      if (dynamics_)
+        std::printf("step %d/%d  t = %.6g s%s  (%s elapsed%s)\n", k, n, dynamics_->time_of(t),
+                    rec.cuts ? "  (after cutting the time step)" : "", duration(elapsed).c_str(), eta.c_str());
+      else
+        std::printf("step %d/%d  load %.4g%s  (%s elapsed%s)\n", k, n, t, rec.cuts ? "  (after cutting the increment)" : "",
+                    duration(elapsed).c_str(), eta.c_str());
       std::fflush(stdout);
     }
     auto progress = [&](const NewtonIterate& it) {
@@ -130,11 +151,15 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
         u_previous_->assign(*u_);
         at_.previous_load = at_.load;
       }
-      u_->assign(*trial);
+      if (dynamics_)
+        dynamics_->end(*trial, *u_);
+      else
+        u_->assign(*trial);
       at_.load = t;
       at_.increment = t < target - 1e-14 ? dt : 0.0;
       continue;
     }
+    if (dynamics_) dynamics_->abandon();
     if (r.status == SolveStatus::Interrupted) return StepOutcome::Stopped;
     if (talk_) std::printf("  step did not converge: %s\n", r.reason().c_str());
     if (rec.cuts >= scene.max_cuts()) {
@@ -206,6 +231,10 @@ void Simulation::first_guess(double t, Vector& trial) {
 
 void Simulation::write_step(int step, double load) {
   Output::NodeFields fields;
+  if (dynamics_) {
+    auto v = dynamics_->velocity().getLocalViewHost(Tpetra::Access::ReadOnly);
+    fields.emplace_back("velocity", std::vector<double>(v.data(), v.data() + 3 * scene_->system().mesh().n_owned_nodes));
+  }
   if (ContactTerm* contact = scene_->contact()) {
     scene_->system().evaluate(*u_, nullptr, nullptr);  // the pressure of this state
     fields.emplace_back("contact_pressure", contact->pressure());
@@ -221,6 +250,10 @@ void Simulation::print_step(const StepRecord& rec) const {
               rec.totals.inverted, rec.solve.seconds_total + rec.seconds_contact, rec.solve.seconds_assembly,
               rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search,
               contact_time(rec).c_str());
+  if (dynamics_)
+    std::printf("  t = %.6g s: kinetic %.6g, elastic %.6g, potential %.6g, contact %.4g (total %.6g)\n", rec.time, rec.kinetic,
+                rec.totals.elastic, rec.totals.external, rec.totals.contact,
+                rec.kinetic + rec.totals.elastic + rec.totals.external + rec.totals.contact);
   if (rec.totals.contacts > 0 || rec.contact_pairs > 0)
     std::printf("  contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g\n",
                 rec.totals.contacts, rec.totals.penetration, rec.inside_depth, rec.totals.contact);
@@ -250,7 +283,7 @@ int Simulation::run() {
   const double V0 = sys.reference_volume();
   if (opt_.restart_file.empty()) {
     out.write_mesh();
-    scene.initial_state(u);
+    if (!initial_given_) scene.initial_state(u);
     write_step(0, 0.0);
   }
   const int n = scene.steps();
@@ -266,7 +299,7 @@ int Simulation::run() {
     if (outcome == StepOutcome::Stopped) {
       // Interrupted inside step k: checkpoint exactly where the load path stands (possibly inside a cut
       // step), so that a restart continues the same run.
-      out.write_checkpoint(at_, u, u_previous_.get());
+      out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d during step %d (load %.6g); checkpoint in %s\n", stop_signal_, k,
                      at_.load, out.checkpoint_file().c_str());
@@ -275,14 +308,19 @@ int Simulation::run() {
     at_ = LoadState{k, rec.load, 0.0, 0, at_.previous_load};
     rec.totals = sys.evaluate(u, nullptr, nullptr);
     rec.volume_ratio = rec.totals.volume / V0;
+    if (dynamics_) {
+      rec.time = dynamics_->time_of(rec.load);
+      rec.kinetic = dynamics_->kinetic_energy();
+    }
     out.log(rec);
     records_.push_back(rec);
+    if (observer_) observer_(rec, u);
     if (k % out.every() == 0 || k == n) write_step(k, rec.load);
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
-    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get());
+    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
-      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get());
+      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", stop_signal_, k,
                      out.checkpoint_file().c_str());

@@ -166,7 +166,7 @@ Output::Output(const OutputParameters& params, const System& system, const std::
                "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
                "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
                "seconds_total,elastic_energy,external_energy,contact_energy,contacts,penetration,contact_pairs,"
-               "contact_rounds,seconds_contact,inside_depth,pattern_changes");
+               "contact_rounds,seconds_contact,inside_depth,pattern_changes,time,kinetic_energy");
       open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
                "step,load,iteration,residual,cg_iterations,step_length,exact_hessian");
     });
@@ -255,13 +255,20 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
     write_rows(file, "/position", H5T_NATIVE_DOUBLE, m.global_nodes, 3, first_node, n_owned, pos.data(), tmp);
     write_rows(file, "/J", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, J.data(), tmp);
     write_rows(file, "/energy_density", H5T_NATIVE_DOUBLE, m.global_elements, 1, first_el, e_owned, psi.data(), tmp);
-    for (const auto& [name, values] : node_fields)
-      write_rows(file, "/" + name, H5T_NATIVE_DOUBLE, m.global_nodes, 1, first_node, n_owned, values.data(), tmp);
+    for (const auto& [name, values] : node_fields) {
+      const int cols = values.size() == static_cast<std::size_t>(3 * n_owned) && n_owned > 0 ? 3 : 1;
+      write_rows(file, "/" + name, H5T_NATIVE_DOUBLE, m.global_nodes, cols, first_node, n_owned, values.data(), tmp);
+    }
     write_attribute(file, "load", load);
     write_attribute(file, "step", step);
   });
   node_fields_.clear();
-  for (const auto& f : node_fields) node_fields_.push_back(f.first);
+  for (const auto& f : node_fields) {
+    // Every rank agrees on a field's shape (a rank with no owned node cannot tell from its sizes).
+    int vector = f.second.size() == 3 * m.n_owned_nodes && m.n_owned_nodes > 0 ? 1 : 0, any = 0;
+    MPI_Allreduce(&vector, &any, 1, MPI_INT, MPI_MAX, comm);
+    node_fields_.emplace_back(f.first, any ? 3 : 1);
+  }
   written_.emplace_back(step, load);
   collectively(comm, [&] {
     if (root_) write_xdmf();
@@ -296,7 +303,8 @@ void Output::write_xdmf() const {
     attr("displacement", "Vector", "Node", m.global_nodes, 3, "/displacement");
     attr("J", "Scalar", "Cell", m.global_elements, 1, "/J");
     attr("energy_density", "Scalar", "Cell", m.global_elements, 1, "/energy_density");
-    for (const auto& name : node_fields_) attr(name.c_str(), "Scalar", "Node", m.global_nodes, 1, ("/" + name).c_str());
+    for (const auto& [name, cols] : node_fields_)
+      attr(name.c_str(), cols == 3 ? "Vector" : "Scalar", "Node", m.global_nodes, cols, ("/" + name).c_str());
     x << "   </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";
@@ -325,11 +333,11 @@ void Output::log(const StepRecord& r) {
        << r.volume_ratio << "," << r.totals.min_J << "," << r.totals.inverted << "," << s.seconds_assembly << ","
        << s.seconds_preconditioner << "," << s.seconds_linear << "," << s.seconds_line_search << "," << s.seconds_total
        << "," << r.totals.elastic << "," << r.totals.external << "," << r.totals.contact << "," << r.totals.contacts << ","
-       << r.totals.penetration << "," << r.contact_pairs << "," << r.contact_rounds << "," << r.seconds_contact << "," << r.inside_depth << "," << r.pattern_changes << "\n";
+       << r.totals.penetration << "," << r.contact_pairs << "," << r.contact_rounds << "," << r.seconds_contact << "," << r.inside_depth << "," << r.pattern_changes << "," << r.time << "," << r.kinetic << "\n";
   log_.flush();
 }
 
-void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous) {
+void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous, const Vector* velocity) {
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes);
   auto rows_of = [&](const Vector& v) {
@@ -339,6 +347,7 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
   const std::vector<double> disp = rows_of(u);
   const bool with_previous = previous && at.previous_load >= 0.0;
   const std::vector<double> prev = with_previous ? rows_of(*previous) : std::vector<double>();
+  const std::vector<double> vel = velocity ? rows_of(*velocity) : std::vector<double>();
   const std::vector<long long> gid(m.node_gid.begin(), m.node_gid.begin() + n_owned);
   // The rename is atomic: a kill at any point leaves either the old checkpoint or the new one. Rows are
   // in output order with each node's global id beside them, so any number of ranks can read it.
@@ -355,13 +364,15 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
                  prev.data(), tmp);
       write_attribute(file, "previous_load", at.previous_load);
     }
+    if (velocity)
+      write_rows(file, "/velocity", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, vel.data(), tmp);
     write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
     write_attribute(file, "steps", steps_);
   });
 }
 
 LoadState Output::read_checkpoint(const std::string& path, const System& sys, int steps, Vector& u,
-                                  Vector* previous) {
+                                  Vector* previous, Vector* velocity) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());
   LoadState c;
@@ -469,6 +480,11 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     if (previous && H5Aexists(file.id(), "previous_load") > 0) {
       c.previous_load = attribute("previous_load", 0.0, c.load);
       read_field("/previous_displacement", *previous);
+    }
+    if (velocity) {
+      if (H5Lexists(file.id(), "/velocity", H5P_DEFAULT) <= 0)
+        fail("has no /velocity: it was written by a quasi-static run, and this scene is dynamic");
+      read_field("/velocity", *velocity);
     }
   });
   return c;

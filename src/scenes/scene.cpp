@@ -54,7 +54,8 @@ Displacement motion_of(const BoundaryConditionParameters& p) {
 
 }  // namespace
 
-Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> comm) : name_(d.name), loading_(d.loading) {
+Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> comm)
+    : name_(d.name), loading_(d.loading), time_(d.time) {
   const std::string file = d.file + ": ";
   try {
     MaterialAssignment materials{d.material.law.spec(), {}};
@@ -174,7 +175,10 @@ void Scene::apply_load(double t, Vector& u) {
         if (bc.prescribed[c]) v(3 * nd + c, 0) = d[c];
     }
   const auto& b = loading_.body_force;
-  system_->set_body_force({t * b[0], t * b[1], t * b[2]});
+  const auto& g = loading_.gravity;
+  const double ramp = dynamic() ? 1.0 : t;
+  system_->set_body_force({ramp * b[0], ramp * b[1], ramp * b[2]});
+  system_->set_gravity({ramp * g[0], ramp * g[1], ramp * g[2]});
   if (contact_)
     for (std::size_t k = 0; k < colliders_->size(); ++k) contact_->set_collider_pose(k, colliders_->pose(k, t));
 }
@@ -191,6 +195,23 @@ void Scene::predict(double t0, double t1, Vector& u) const {
   if (skeleton_->empty() || !skeleton_->skinning()) return;
   auto v = u.getLocalViewHost(Tpetra::Access::ReadWrite);
   skeleton_->skin(t0, t1, X_.data(), free_, v.data(), system_->mesh().n_owned_nodes);
+}
+
+void Scene::initial_velocity(Vector& v) const {
+  const Mesh& m = system_->mesh();
+  double local[4] = {0, 0, 0, static_cast<double>(m.n_owned_nodes)}, c[4];
+  for (std::size_t n = 0; n < m.n_owned_nodes; ++n)
+    for (int d = 0; d < 3; ++d) local[d] += X_(n, d);
+  Teuchos::reduceAll(*system_->comm(), Teuchos::REDUCE_SUM, 4, local, c);
+  const auto& w = time_.initial_spin;
+  const auto& v0 = time_.initial_velocity;
+  auto h = v.getLocalViewHost(Tpetra::Access::OverwriteAll);
+  for (std::size_t n = 0; n < m.n_owned_nodes; ++n) {
+    const double r[3] = {X_(n, 0) - c[0] / c[3], X_(n, 1) - c[1] / c[3], X_(n, 2) - c[2] / c[3]};
+    h(3 * n + 0, 0) = v0[0] + w[1] * r[2] - w[2] * r[1];
+    h(3 * n + 1, 0) = v0[1] + w[2] * r[0] - w[0] * r[2];
+    h(3 * n + 2, 0) = v0[2] + w[0] * r[1] - w[1] * r[0];
+  }
 }
 
 void Scene::initial_state(Vector& u) const {

@@ -56,6 +56,16 @@ class System {
 
   // A matrix on the current graph. Matrices made before a pattern change (update_pattern) are stale.
   Teuchos::RCP<CrsMatrix> create_matrix() const;
+  // A matrix on the mesh's own graph (element couplings only, never grown; its column indices are the
+  // overlap DOFs, the first columns of every later graph): mass and damping matrices live there.
+  Teuchos::RCP<CrsMatrix> create_mesh_matrix() const;
+  // The mass matrix on the mesh's graph, M_(ai)(bj) = delta_ij int rho N_a N_b dV (tet4: the exact
+  // rho V / 20 (1 + delta_ab); hex8: 2x2x2 Gauss), or its lumped form (row sums on the diagonal, the
+  // nodal masses). Dirichlet rows and columns are not eliminated: it is data, not a Hessian.
+  Teuchos::RCP<CrsMatrix> mass_matrix(bool lumped) const;
+  // The elastic energy's Hessian alone at u (projected as each law says), Dirichlet rows and columns
+  // eliminated, into a matrix on the mesh's graph (Rayleigh damping's stiffness).
+  void elastic_hessian(const Vector& u, CrsMatrix& K) const;
   Teuchos::RCP<Vector> create_vector() const;
 
   // Dirichlet DOFs, given as local overlap DOF indices (3 * local node + component). Every rank must
@@ -121,7 +131,7 @@ class System {
   ElementData elements_;
   Teuchos::RCP<const Map> owned_dofs_, overlap_dofs_, column_dofs_, owned_nodes_;
   Teuchos::RCP<const Import> column_importer_;
-  Teuchos::RCP<const CrsGraph> graph_;
+  Teuchos::RCP<const CrsGraph> graph_, mesh_graph_;
   Teuchos::RCP<Vector> u_columns_;
   std::set<std::pair<GlobalId, GlobalId>> extra_;  // couplings beyond the mesh graph (owned row node, column node)
   unsigned pattern_version_ = 0;

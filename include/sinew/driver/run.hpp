@@ -18,6 +18,7 @@ struct RunOptions {
 
 class Scene;
 class NonlinearSolver;
+class Dynamics;
 
 // One quasi-static run: the scene, its solver and output, and the load-step loop.
 class Simulation {
@@ -34,9 +35,16 @@ class Simulation {
   // returns a signal number, 0 to go on. The default asks whether any rank received SIGINT or SIGTERM;
   // tests replace it to stop at a chosen point.
   void set_stop_check(std::function<int()> check);
+  // The state to start from instead of the scene's initial state (and, for a dynamic run, its
+  // velocity): a mode shape, a state from elsewhere. Before run(); not with a restart.
+  void set_initial(const Vector& u, const Vector* velocity = nullptr);
+  // Called after every completed step with its record and the state (tests, tools).
+  void set_step_observer(std::function<void(const StepRecord&, const Vector& u)> observer) { observer_ = std::move(observer); }
 
   Scene& scene() { return *scene_; }
   const Vector& displacement() const { return *u_; }
+  // A dynamic run's velocity (null for a quasi-static one).
+  const Vector* velocity() const;
   const std::vector<StepRecord>& records() const { return records_; }
   const Output& output() const { return *out_; }
 
@@ -61,12 +69,15 @@ class Simulation {
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<NonlinearSolver> solver_;
+  std::unique_ptr<Dynamics> dynamics_;  // a dynamic run's velocity and integrator
   std::unique_ptr<Output> out_;
   Teuchos::RCP<Vector> u_;
   Teuchos::RCP<Vector> u_previous_;  // the converged state before u_ (at at_.previous_load), for the predictor
   std::vector<StepRecord> records_;
   LoadState at_;  // where the run stands: the state in u_
   std::function<int()> stop_check_;
+  std::function<void(const StepRecord&, const Vector&)> observer_;
+  bool initial_given_ = false;
   int stop_signal_ = 0;
   bool talk_ = false;
   double started_ = 0.0;     // wall clock at the start of run(), seconds

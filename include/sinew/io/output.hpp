@@ -56,6 +56,8 @@ struct StepRecord {
   SolveReport solve;
   EvaluationTotals totals;
   double volume_ratio = 1.0;
+  // Dynamic runs: the time at the step's end and the kinetic energy there.
+  double time = 0.0, kinetic = 0.0;
   // Self contact: detect-and-solve rounds, pairs after the last detection, seconds spent detecting, and
   // the deepest a surface point lies inside the body at the end (from a detection of the end state).
   int contact_rounds = 0;
@@ -88,7 +90,8 @@ class Output {
   int every() const { return params_.every; }
 
   void write_mesh();
-  // Per owned node, a named scalar written beside the step's fields (e.g. contact pressure).
+  // Per owned node, a named scalar (n values) or vector (3 n, interleaved) written beside the step's
+  // fields (contact pressure, velocity).
   using NodeFields = std::vector<std::pair<std::string, std::vector<double>>>;
   // Collective: one step file and the XDMF index, and the surface when its turn has come. Every step of
   // a run must be given the same node fields (the XDMF index lists them for all).
@@ -107,12 +110,15 @@ class Output {
   // Collective: the displacement u at load state `at`.
   // previous: the converged state at at.previous_load, kept for the predictor (written when given and
   // at.previous_load >= 0).
-  void write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous = nullptr);
+  // velocity: a dynamic run's, which a restart needs to continue the same trajectory.
+  void write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous = nullptr,
+                        const Vector* velocity = nullptr);
 
   // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
   // Throws InputError (kind File) when the file is missing, unreadable, corrupt or from another scene.
+  // With velocity given, the checkpoint must hold one (a dynamic run's).
   static LoadState read_checkpoint(const std::string& path, const System& system, int steps, Vector& u,
-                                   Vector* previous = nullptr);
+                                   Vector* previous = nullptr, Vector* velocity = nullptr);
 
  private:
   void write_xdmf() const;
@@ -123,7 +129,7 @@ class Output {
   int steps_ = 1;
   bool root_ = false;
   std::vector<std::pair<int, double>> written_;  // (step, load) of step files
-  std::vector<std::string> node_fields_;        // names of the extra node fields of the step files
+  std::vector<std::pair<std::string, int>> node_fields_;  // extra node fields of the step files: name, components
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
   std::ofstream log_, newton_log_;

@@ -20,6 +20,7 @@
 #include <sinew/scenes/contact.hpp>
 #include <sinew/scenes/region.hpp>
 #include <sinew/scenes/skeleton.hpp>
+#include <sinew/scenes/time.hpp>
 
 #include <functional>
 #include <memory>
@@ -69,7 +70,7 @@ struct LoadingParameters {
   enum class Predictor { None, Extrapolate };
   int steps = 0, max_cuts = 0, scramble_seed = 0;
   Predictor predictor = Predictor::Extrapolate;
-  std::array<double, 3> body_force{};
+  std::array<double, 3> body_force{}, gravity{};
   Initial initial = Initial::Rest;
   double scramble_scale = 0.0;
   NamedSections<BoundaryConditionParameters> conditions;
@@ -78,7 +79,10 @@ struct LoadingParameters {
   void visit(V& v) {
     v.entry("Steps", steps, 1, "number of quasi-static load steps", Range::closed(1, 1e6));
     v.sections("Boundary conditions", conditions, "one sublist per condition");
-    v.entry("Body force", body_force, {0.0, 0.0, 0.0}, "force per reference volume, ramped with the load");
+    v.entry("Body force", body_force, {0.0, 0.0, 0.0},
+            "force per reference volume, ramped with the load (in full from the start of a dynamic run)");
+    v.entry("Gravity", gravity, {0.0, 0.0, 0.0},
+            "gravitational acceleration (e.g. {0, 0, -9.81}), times each material's Density; ramped like the body force");
     v.choice("Initial state", initial, Initial::Rest,
              Choices<Initial>{{"rest", Initial::Rest}, {"scramble", Initial::Scramble}},
              "the starting displacement: rest, or scramble (vertices placed at random, Fig. 3)");
@@ -102,6 +106,7 @@ struct SceneDescription {
   LoadingParameters loading;
   SkeletonParameters skeleton;
   ContactParameters contact;
+  TimeParameters time;
 };
 
 // A prescribed motion resolved on this rank's nodes: a boundary condition, or a bone.
@@ -121,9 +126,12 @@ class Scene {
   System& system() { return *system_; }
   const System& system() const { return *system_; }
   const std::vector<BoundaryCondition>& boundary_conditions() const { return bcs_; }
-  int steps() const { return loading_.steps; }
+  // Load steps of a quasi-static run, time steps of a dynamic one.
+  int steps() const { return time_.dynamic() ? time_.steps() : loading_.steps; }
+  const TimeParameters& time() const { return time_; }
+  bool dynamic() const { return time_.dynamic(); }
   int max_cuts() const { return loading_.max_cuts; }
-  bool extrapolate() const { return loading_.predictor == LoadingParameters::Predictor::Extrapolate; }
+  bool extrapolate() const { return !dynamic() && loading_.predictor == LoadingParameters::Predictor::Extrapolate; }
   const std::string& name() const { return name_; }
 
   // Sets the Dirichlet entries of u (owned DOFs) and the body force for load fraction t.
@@ -136,6 +144,8 @@ class Scene {
 
   // The starting displacement: zero, or the "scramble" of the paper's Fig. 3.
   void initial_state(Vector& u) const;
+  // The starting velocity of a dynamic run: Time/Initial velocity plus Initial spin x (X - centroid).
+  void initial_velocity(Vector& v) const;
 
   // Contact (null without a Contact section). Collider poses follow apply_load.
   ContactTerm* contact() { return contact_.get(); }
@@ -148,6 +158,7 @@ class Scene {
  private:
   std::string name_;
   LoadingParameters loading_;
+  TimeParameters time_;
   std::unique_ptr<System> system_;
   std::unique_ptr<Skeleton> skeleton_;
   std::unique_ptr<Colliders> colliders_;

@@ -1,0 +1,56 @@
+// Dynamics: the integrators' predictor, prescribed values and updates (driver/dynamics.hpp).
+#include <sinew/driver/dynamics.hpp>
+
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Vector.hpp>
+
+namespace sinew {
+
+Dynamics::Dynamics(Scene& scene) : scene_(scene), p_(scene.time()), end_time_(scene.time().end_time()) {
+  System& sys = scene.system();
+  inertia_ = std::make_shared<InertiaTerm>(sys, p_.lumped);
+  sys.add_term(inertia_);
+  v_ = sys.create_vector();
+  predictor_ = sys.create_vector();
+  scratch_ = sys.create_vector();
+  scene.initial_velocity(*v_);
+  if (p_.rayleigh_stiffness > 0.0) K_start_ = sys.create_mesh_matrix();
+}
+
+void Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial) {
+  System& sys = scene_.system();
+  h_ = (t1 - t0) * end_time_;
+  const bool midpoint = p_.integrator == TimeParameters::Integrator::ImplicitMidpoint;
+  const double reach = midpoint ? 0.5 * h_ : h_;  // how far y lies from u_n, in time
+  predictor_->update(1.0, u, reach, *v_, 0.0);
+  trial.assign(*predictor_);
+  if (midpoint) {
+    // y's prescribed values: the averages of u_n's (those at t0) and those at t1.
+    scratch_->assign(u);
+    scene_.apply_load(t1, *scratch_);
+    auto y = trial.getLocalViewHost(Tpetra::Access::ReadWrite);
+    auto a = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+    auto b = scratch_->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (int d : sys.fixed_owned_dofs()) y(d, 0) = 0.5 * (a(d, 0) + b(d, 0));
+    scratch_->assign(u);
+    scene_.apply_load(0.5 * (t0 + t1), *scratch_);  // colliders and loads at the midpoint
+  } else {
+    scene_.apply_load(t1, trial);
+  }
+  if (K_start_) sys.elastic_hessian(u, *K_start_);
+  inertia_->set_step(reach * reach, reach, *predictor_, u, p_.rayleigh_mass, K_start_.get(), p_.rayleigh_stiffness);
+}
+
+void Dynamics::end(const Vector& y, Vector& u) {
+  inertia_->off();
+  if (p_.integrator == TimeParameters::Integrator::ImplicitMidpoint) {
+    // u_(n+1) = 2 y - u_n; v_(n+1) = 2 (u_(n+1) - u_n) / h - v_n = 4 (y - u_n) / h - v_n
+    v_->update(4.0 / h_, y, -4.0 / h_, u, -1.0);
+    u.update(2.0, y, -1.0);
+  } else {
+    v_->update(1.0 / h_, y, -1.0 / h_, u, 0.0);
+    u.assign(y);
+  }
+}
+
+}  // namespace sinew
