@@ -11,6 +11,8 @@
 #include <Teuchos_ParameterList.hpp>
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 using namespace sinew;
 using namespace sinew::test;
 
@@ -270,38 +272,52 @@ TEST(Parameters, StrictXmlReading) {
 TEST(HessianPolicy, EveryTransition) {
   HessianPolicy never(0.0);
   never.start(100.0);
-  EXPECT_FALSE(never.next_jacobian(1e-9, false));  // 0 disables the exact Hessian
+  EXPECT_FALSE(never.next_jacobian(1e-9, 0.0));  // 0 disables the exact Hessian
 
-  HessianPolicy p(0.01);
+  // Inverted points: per point (the default) and exact go exact while some are inverted, whole mesh
+  // does not; only exact gives them their exact Hessian.
+  for (auto [inv, exact_when_tangled, at_inverted] :
+       {std::tuple{HessianPolicy::Inverted::PerPoint, true, false}, std::tuple{HessianPolicy::Inverted::Exact, true, true},
+        std::tuple{HessianPolicy::Inverted::WholeMesh, false, false}}) {
+    HessianPolicy q(0.01, inv);
+    q.start(100.0);
+    EXPECT_EQ(q.next_jacobian(0.5, 0.001), exact_when_tangled);  // a few inverted
+    EXPECT_EQ(q.exact_at_inverted(), at_inverted);
+    EXPECT_FALSE(q.next_jacobian(0.5, 0.2));  // a tangle of many: projected in every mode
+    EXPECT_FALSE(q.next_jacobian(0.5, 0.0, true));  // an undefined point: projected in every mode
+  }
+  EXPECT_FALSE(HessianPolicy(0.01).exact_at_inverted());
+
+  HessianPolicy p(0.01, HessianPolicy::Inverted::WholeMesh);
   p.start(100.0);
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
-  EXPECT_FALSE(p.next_jacobian(50.0, false));  // residual not small yet
+  EXPECT_FALSE(p.next_jacobian(50.0, 0.0));  // residual not small yet
   EXPECT_FALSE(p.exact_used());
-  EXPECT_FALSE(p.next_jacobian(0.5, true));  // small but tangled
-  EXPECT_TRUE(p.next_jacobian(0.5, false));  // Projected -> Exact
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.001));  // small but tangled
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));  // Projected -> Exact
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
   EXPECT_TRUE(p.last_exact());
   EXPECT_TRUE(p.exact_used());
   p.step_taken(1.0);  // a full step keeps it
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
-  EXPECT_FALSE(p.next_jacobian(5.0, false));  // the residual grew: Exact -> Projected
+  EXPECT_FALSE(p.next_jacobian(5.0, 0.0));  // the residual grew: Exact -> Projected
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
   p.line_search_failed();  // a projected direction's failure is not the exact Hessian's fault
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
-  EXPECT_TRUE(p.next_jacobian(0.5, false));
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
   p.step_taken(0.25);  // a short step: Exact -> FellBack
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
-  EXPECT_FALSE(p.next_jacobian(1e-6, false));  // for the rest of the solve
+  EXPECT_FALSE(p.next_jacobian(1e-6, 0.0));  // for the rest of the solve
   EXPECT_TRUE(p.retry_projected());
 
   p.start(100.0);  // a new solve starts over
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
   EXPECT_FALSE(p.retry_projected());
-  EXPECT_TRUE(p.next_jacobian(0.1, false));
+  EXPECT_TRUE(p.next_jacobian(0.1, 0.0));
   p.direction_not_descent();  // Exact -> FellBack
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
   p.start(100.0);
-  EXPECT_TRUE(p.next_jacobian(0.1, false));
+  EXPECT_TRUE(p.next_jacobian(0.1, 0.0));
   p.line_search_failed();  // Exact -> FellBack
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
 }

@@ -86,24 +86,33 @@ void ColliderShape::prepare() {
   tree_.build(boxes);
 }
 
-double ColliderShape::distance(const Vec& x, Vec& g) const {
-  auto from_point = [&](const Vec& q, double r) {  // distance to a ball of radius r around q
+double ColliderShape::distance(const Vec& x, Vec& g, double* hess) const {
+  // Distance to a point q (radius r) or to a line through q along the unit axis `along` (when given):
+  // the Hessian of |x - q| is (I - g g^T - along along^T) / |x - q|.
+  auto from_point = [&](const Vec& q, double r, const Vec* along) {
     const Vec d = x - q;
     const double l = norm(d);
     g = l > 0.0 ? (1.0 / l) * d : Vec{0.0, 0.0, 1.0};
+    if (hess)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          hess[3 * i + j] = l > 0.0 ? ((i == j) - g[i] * g[j] - (along ? (*along)[i] * (*along)[j] : 0.0)) / l : 0.0;
     return l - r;
   };
+  if (hess)
+    for (int k = 0; k < 9; ++k) hess[k] = 0.0;
   switch (kind) {
     case Kind::HalfSpace: g = normal; return dot(x - point, normal);
-    case Kind::Sphere: return from_point(center, radius);
+    case Kind::Sphere: return from_point(center, radius, nullptr);
     case Kind::Capsule: {
       const double s = closest_on_segment(x, a, b);
-      return from_point(a + s * (b - a), radius);
+      const Vec axis = normalized(b - a);
+      return from_point(a + s * (b - a), radius, s > 0.0 && s < 1.0 ? &axis : nullptr);
     }
     case Kind::Cylinder: {
-      const Vec ab = b - a;
+      const Vec ab = b - a, axis = normalized(ab);
       const double s = dot(x - a, ab) / dot(ab, ab);
-      return from_point(a + s * ab, radius);
+      return from_point(a + s * ab, radius, &axis);
     }
     case Kind::Mesh: break;
   }
@@ -118,17 +127,22 @@ double ColliderShape::distance(const Vec& x, Vec& g) const {
   const Vec q = closest_on_triangle(x, V[T[t][0]], V[T[t][1]], V[T[t][2]], w);
   // The pseudo-normal of the feature the closest point lies on: the face, an edge or a vertex.
   Vec pn = face_normal_[t];
+  Vec edge{0.0, 0.0, 0.0};
   const int on = (w[0] > 1e-12) + (w[1] > 1e-12) + (w[2] > 1e-12);
   if (on == 1) {
     pn = vertex_normal_[T[t][w[0] > 1e-12 ? 0 : (w[1] > 1e-12 ? 1 : 2)]];
   } else if (on == 2) {
     const int k = w[2] <= 1e-12 ? 0 : (w[0] <= 1e-12 ? 1 : 2);  // edge (0-1), (1-2) or (2-0)
     pn = edge_normal_[t][k];
+    edge = normalized(V[T[t][(k + 1) % 3]] - V[T[t][k]]);
   }
   const Vec d = x - q;
   const double l = std::sqrt(best2);
   const double sign = dot(d, pn) >= 0.0 ? 1.0 : -1.0;
   g = l > 1e-14 ? (sign / l) * d : normalized(pn);
+  if (hess && on < 3 && l > 1e-14)  // over an edge or a corner the level set is curved
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) hess[3 * i + j] = sign * ((i == j) - g[i] * g[j] - edge[i] * edge[j]) / l;
   return sign * l;
 }
 
@@ -274,10 +288,21 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
         energy -= 0.5 * surface_.area[sample_vertex_[i]] * lambda * lambda / k;
         if (!bounds[c].contains(xl) && lambda == 0.0) continue;
         Vec gl;
-        const double phi = colliders_[c].distance(xl, gl);
+        double Hl[9];
+        const bool exact = in.want_matrix && in.projection && *in.projection != Projection::Clamp && *in.projection != Projection::Abs;
+        const double phi = colliders_[c].distance(xl, gl, exact ? Hl : nullptr);
         const double s = lambda / k + delta - phi;
         if (s <= 0.0) continue;
         const Vec g = poses_[c].rotate(gl);
+        // The exact Hessian k A (g g^T - s hess phi) when asked for (hess phi rotated to the world frame).
+        double curvature[3][3] = {};
+        if (exact) {
+          const Mat3& R = poses_[c].R;
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+              for (int m = 0; m < 3; ++m)
+                for (int n2 = 0; n2 < 3; ++n2) curvature[a][b] += R(a, m) * Hl[3 * m + n2] * R(b, n2);
+        }
         energy += 0.5 * kA * s * s;
         ++pressing;
         penetration = std::max(penetration, -phi);
@@ -286,7 +311,8 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
           if (in.want_force) f(3 * n + a) -= kA * s * g[a];
           if (in.want_matrix) {
             const int cols[3] = {3 * n, 3 * n + 1, 3 * n + 2};
-            const double vals[3] = {kA * g[a] * g[0], kA * g[a] * g[1], kA * g[a] * g[2]};
+            const double vals[3] = {kA * (g[a] * g[0] - s * curvature[a][0]), kA * (g[a] * g[1] - s * curvature[a][1]),
+                                    kA * (g[a] * g[2] - s * curvature[a][2])};
             A.sumIntoValues(3 * n + a, cols, 3, vals, true, true);
           }
         }
@@ -313,20 +339,25 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   auto position = [&](int n) { return Vec{Xh(n, 0) + uh(3 * n, 0), Xh(n, 1) + uh(3 * n + 1, 0), Xh(n, 2) + uh(3 * n + 2, 0)}; };
 
   // Colliders: a sample still behind a collider by more than a tenth of the thickness gets its traction
-  // raised (Uzawa).
+  // raised (Uzawa, between the solves of a step), one off contact loses it (at every detection).
   long long raised = 0;
-  if (keep && !colliders_.empty()) {
+  if (!colliders_.empty()) {
     for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
       const Vec x = position(owned_samples_[i]);
       for (std::size_t c = 0; c < colliders_.size(); ++c) {
         const Vec xl = poses_[c].inverse().apply(x);
-        if (!colliders_[c].bounds(delta).contains(xl)) continue;
+        double& lambda = collider_lambda_[i * colliders_.size() + c];
+        if (!colliders_[c].bounds(delta + lambda / k).contains(xl)) {
+          lambda = 0.0;
+          continue;
+        }
         Vec gl;
         const double phi = colliders_[c].distance(xl, gl);
-        double& lambda = collider_lambda_[i * colliders_.size() + c];
-        if (phi < -0.1 * delta) {
+        if (keep && phi < -0.1 * delta) {
           lambda = std::max(0.0, lambda + k * (delta - phi));
           ++raised;
+        } else if (lambda / k + delta - phi <= 0.0) {
+          lambda = 0.0;  // off contact: its traction goes (the state feels no difference; the energy a constant)
         }
       }
     }
@@ -386,12 +417,14 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     if (g < -0.1 * delta) {  // Uzawa: the traction that would have held it at the thickness
       lambda = std::max(0.0, lambda + k * (delta - g));
       ++stats.raised;
+    } else if (lambda / k + delta - g <= 0.0) {
+      lambda = 0.0;  // not pushing: its traction goes (the state feels no difference)
     }
     kept.push_back({c.vertex, 1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0, lambda});
   }
   // A sample paired again after a fresh start carries its traction.
   std::vector<double> carried(surface_.vertices(), 0.0);
-  if (!keep)
+  if (!keep)  // (a pair that no longer pushes has dropped its traction already)
     for (const Chosen& c : last) carried[c.vertex] = c.lambda;
 
   // Samples inside the deformed elements this rank owns.

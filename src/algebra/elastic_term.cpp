@@ -69,7 +69,11 @@ void ElasticTerm::add(const TermInput& in, TermOutput& out) const {
   t.min_J = HUGE_VAL;
   for (const Block& b : blocks_) {
     if (b.elements.extent(0) == 0) continue;
-    const Projection p = in.projection.value_or(b.law.projection);
+    Projection p = in.projection.value_or(b.law.projection);
+    // "Exact where not inverted" keeps the law's own projection for the inverted points.
+    if (p == Projection::ExactUninvertedClamp || p == Projection::ExactUninvertedAbs)
+      p = b.law.projection == Projection::Abs ? Projection::ExactUninvertedAbs
+          : b.law.projection == Projection::None ? Projection::None : Projection::ExactUninvertedClamp;
 #if defined(KOKKOS_ENABLE_SERIAL) && defined(KOKKOS_ENABLE_OPENMP)
     if (in.backend == Backend::Serial) {
       t.add(hex ? detail::assemble_hex8<Kokkos::Serial>(b.law, p, b.elements, r)

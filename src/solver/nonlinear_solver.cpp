@@ -67,6 +67,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     nominal_ = in_;
     nominal_.set_x(x0_);
     energy_scale_ = sys.stiffness_scale() * sys.reference_volume();
+    points_ = static_cast<double>(sys.mesh().global_elements) * quadrature_points(sys.mesh().type);
   }
 
   void set_W_factory(const Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>>& f) { factory_ = f; }
@@ -107,8 +108,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
       W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
     SolveState& s = *state_;
     std::optional<Projection> projection;
-    if (W && s.policy.next_jacobian(s.last_f_norm, s.last.inverted > 0 || s.last.undefined > 0))
-      projection = Projection::None;
+    // Exact where the policy says, except at inverted points (see HessianPolicy).
+    if (W && s.policy.next_jacobian(s.last_f_norm, static_cast<double>(s.last.inverted) / points_, s.last.undefined > 0))
+      projection = s.policy.exact_at_inverted() ? Projection::None : Projection::ExactUninvertedClamp;
     s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection);
     if (f) s.last_f_norm = f->norm2();
     s.seconds_assembly += since(t0);
@@ -116,7 +118,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   System& sys_;
   SolveState* state_ = nullptr;
-  double energy_scale_ = 0.0;
+  double energy_scale_ = 0.0, points_ = 1.0;  // quadrature points of the whole mesh
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
   Teuchos::RCP<Thyra::VectorBase<double>> x0_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> factory_;
@@ -467,7 +469,10 @@ void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->in
 
 SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
   const Vector start(u, Teuchos::Copy);
-  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below));
+  const std::string& inv = impl_->params.inverted;
+  const auto inverted = inv == "exact" ? HessianPolicy::Inverted::Exact
+                        : inv == "per point" ? HessianPolicy::Inverted::PerPoint : HessianPolicy::Inverted::WholeMesh;
+  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted));
   if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used) {
     // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
     u.assign(start);

@@ -180,7 +180,7 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
     J_sum += s.w * s.J;
     w_sum += s.w;
     if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.w);
-    if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, projection), s.dN, s.w);
+    if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, point_projection(projection, s.J)), s.dN, s.w);
   }
   if (want_matrix)
     for (int a = 1; a < NDOF; ++a)
@@ -306,7 +306,7 @@ struct PointLoop : TotalsReduction {
     }
     if (want_matrix) {
       double G[9][NDOF];
-      stiffness_factor<NPE>(G, model.projected_hessian(s.F, projection), s.dN);
+      stiffness_factor<NPE>(G, model.projected_hessian(s.F, point_projection(projection, s.J)), s.dN);
       for (int a = 0; a < NPE; ++a)
         for (int i = 0; i < 3; ++i) {
           const int row = dof[3 * a + i];

@@ -49,8 +49,20 @@ struct NoOptions {
 enum class Projection {
   None,   // the exact Hessian, indefinite wherever the energy is non-convex
   Clamp,  // negative eigenvalues set to zero (the paper, Sec. 4)
-  Abs     // negative eigenvalues replaced by their magnitude (Chen et al., SIGGRAPH 2024)
+  Abs,    // negative eigenvalues replaced by their magnitude (Chen et al., SIGGRAPH 2024)
+  // Per quadrature point: exact where J > 0, clamped (or abs) where the point is inverted. Newton near
+  // convergence with a few inverted points: the rest of the body keeps its exact Hessian (and Newton
+  // its quadratic convergence), the inverted points their descent guarantee.
+  ExactUninvertedClamp,
+  ExactUninvertedAbs
 };
+
+// The projection a point of Jacobian J gets.
+KOKKOS_INLINE_FUNCTION Projection point_projection(Projection p, double J) {
+  if (p == Projection::ExactUninvertedClamp) return J > 0.0 ? Projection::None : Projection::Clamp;
+  if (p == Projection::ExactUninvertedAbs) return J > 0.0 ? Projection::None : Projection::Abs;
+  return p;
+}
 
 KOKKOS_INLINE_FUNCTION double filter_eigenvalue(double e, Projection p) {
   if (p == Projection::Clamp) return e > 0.0 ? e : 0.0;

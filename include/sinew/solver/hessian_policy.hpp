@@ -3,11 +3,15 @@
 // The PSD-projected Hessian (the paper's safeguard, Sec. 4) gives a descent direction from any state,
 // inverted ones included, but wherever an element is non-convex it is not the true Hessian, which turns
 // Newton's final quadratic convergence linear. So: project until the residual has dropped below
-// `exact_below` times the solve's first residual with no point inverted or undefined, then use the
-// exact Hessian; fall back to projection for the rest of the solve at the first sign that the state is
-// not yet in the quadratic region: a direction that does not descend, a step the line search had to cut
-// below 1/2, or a failed line search. A failed solve is worth redoing with projection only when it used
-// the exact Hessian at all.
+// `exact_below` times the solve's first residual, then use the exact Hessian; how inverted points take
+// part is `Inverted`: PerPoint (exact where J > 0, projected where J <= 0), Exact (their exact Hessian
+// too), both only while at most a few points are inverted (`few`, a fraction of all; a tangle of many
+// keeps the whole Hessian projected: with the exact Hessian a scrambled cube settled in a tangled
+// equilibrium instead of going back to rest), or WholeMesh (any inverted point keeps the whole Hessian
+// projected); undefined points (Neo-Hookean, J <= 0) always do. Fall back to projection for the rest of the solve at
+// the first sign that the state is not yet in the quadratic region: a direction that does not descend,
+// a step the line search had to cut below 1/2, or a failed line search. A failed solve is worth redoing
+// with projection only when it used the exact Hessian at all.
 //
 //   Projected <--(small residual, nothing tangled)--> Exact --(bad direction or short step)--> FellBack
 #pragma once
@@ -17,8 +21,13 @@ namespace sinew {
 class HessianPolicy {
  public:
   enum class Mode { Projected, Exact, FellBack };
+  enum class Inverted { Exact, PerPoint, WholeMesh };
 
-  explicit HessianPolicy(double exact_below = 0.0) : exact_below_(exact_below) {}
+  explicit HessianPolicy(double exact_below = 0.0, Inverted inverted = Inverted::PerPoint)
+      : exact_below_(exact_below), inverted_(inverted) {}
+
+  // In Exact mode: whether inverted points get their exact Hessian too (else their projection).
+  bool exact_at_inverted() const { return inverted_ == Inverted::Exact; }
 
   double exact_below() const { return exact_below_; }
   Mode mode() const { return mode_; }
@@ -32,10 +41,16 @@ class HessianPolicy {
     exact_used_ = last_exact_ = false;
   }
 
-  // Before each Jacobian: the residual of the current state, and whether any point is inverted or
-  // undefined. Returns whether to assemble the exact Hessian. Until a fall-back, the choice follows the
-  // current state (a residual that grows again, or a state that tangles, goes back to projection).
-  bool next_jacobian(double residual, bool tangled) {
+  // The largest fraction of inverted points that still allows the exact Hessian (PerPoint, Exact).
+  static constexpr double few = 0.01;
+
+  // Before each Jacobian: the residual of the current state, the fraction of its points that are
+  // inverted, and whether any point is undefined. Returns whether to assemble the exact Hessian. Until a
+  // fall-back, the choice follows the current state (a residual that grows again, or a state that
+  // tangles, goes back to projection).
+  bool next_jacobian(double residual, double inverted_fraction, bool undefined = false) {
+    const bool tangled =
+        undefined || (inverted_ == Inverted::WholeMesh ? inverted_fraction > 0.0 : inverted_fraction > few);
     if (mode_ != Mode::FellBack)
       mode_ = exact_below_ > 0.0 && f0_ > 0.0 && residual < exact_below_ * f0_ && !tangled ? Mode::Exact : Mode::Projected;
     last_exact_ = mode_ == Mode::Exact;
@@ -59,6 +74,7 @@ class HessianPolicy {
   }
 
   double exact_below_;
+  Inverted inverted_ = Inverted::PerPoint;
   double f0_ = 0.0;
   Mode mode_ = Mode::Projected;
   bool exact_used_ = false, last_exact_ = false;

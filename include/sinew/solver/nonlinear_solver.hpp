@@ -24,7 +24,7 @@ struct SolverParameters {
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
   int max_iterations = 0;
   std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
-  std::string near_null_space, rebuild;
+  std::string near_null_space, rebuild, inverted;
   double rebuild_factor = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
@@ -70,6 +70,12 @@ struct SolverParameters {
             "use the unprojected Hessian once |F| < this times the step's first |F| and nothing is inverted "
             "(0: always project); a solve that fails after using it is redone with projection",
             Range::closed_open(0.0, 1.0));
+    v.choice("Inverted points", inverted, std::string("per point"),
+             Choices<std::string>{{"exact", "exact"}, {"per point", "per point"}, {"whole mesh", "whole mesh"}},
+             "when the exact Hessian is due ('Exact Hessian below') and some points are inverted: per point (exact where "
+             "J > 0, the law's projection where J <= 0; measured: 1,283 -> 793 Newton iterations on a dropped blob), "
+             "exact there too (650, but the scramble then ends in a tangled equilibrium), or whole mesh (projected "
+             "everywhere while any point is inverted)");
     v.entry("Verbose", verbose, false, "print NOX's own iteration output");
     v.raw("NOX", nox, "raw NOX parameters laid over Sinew's defaults");
     v.raw("Stratimikos", stratimikos, "raw Stratimikos (Belos, MueLu) parameters laid over Sinew's defaults");

@@ -28,7 +28,9 @@
 // signed distance (positive outside), and a multiplier per sample and collider; the Hessian
 // k A (grad phi grad phi^T - (delta - phi + lambda / k) hess phi) is projected to k A grad phi grad phi^T
 // (the curvature part is negative semi-definite for convex shapes, so this is the PSD projection; for a
-// mesh collider it is the Gauss-Newton part).
+// mesh collider it is the Gauss-Newton part), except where the solver asks for the exact Hessian (near
+// convergence; without the curvature part Newton converges linearly on a body resting on a cylinder:
+// 10-55 iterations per time step instead of 2-5).
 //
 // Across ranks: the surface (vertices, triangles, rings) is replicated; each rank locates samples in
 // the elements it owns and pairs its own samples by proximity; the pairs are gathered, and each rank
@@ -61,8 +63,10 @@ struct ColliderShape {
 
   // Builds what a mesh collider's queries need; throws InputError for a degenerate shape.
   void prepare();
-  // Signed distance at x (positive outside) and its gradient (unit outward direction).
-  double distance(const geom::Vec& x, geom::Vec& gradient) const;
+  // Signed distance at x (positive outside) and its gradient (unit outward direction); with hessian
+  // given, also its Hessian (row-major 3x3: the level set's curvature, zero for a half-space or over a
+  // mesh face).
+  double distance(const geom::Vec& x, geom::Vec& gradient, double* hessian = nullptr) const;
   // A box outside which the distance exceeds `band` (infinite for a half-space).
   geom::Box bounds(double band) const;
 
