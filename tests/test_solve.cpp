@@ -468,6 +468,33 @@ TEST(Solve, CorruptOrMismatchedCheckpointsAreNamedInputErrors) {
                   c)
                 .find("non-finite"),
             std::string::npos);
+  // Corrupt in one row only (the last: on 2 ranks, only the last rank's block): every rank must end
+  // with the error, none may wait for the others (this hung before the reads and checks were split
+  // from the collective import).
+  auto edit_last_row = [](hid_t f, const char* name, hid_t type, const void* value) {
+    hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+    hid_t sp = H5Dget_space(d);
+    hsize_t dims[2] = {0, 0};
+    const int nd = H5Sget_simple_extent_dims(sp, dims, nullptr);
+    hsize_t start[2] = {dims[0] - 1, 0}, count[2] = {1, 1};
+    H5Sselect_hyperslab(sp, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    hid_t mem = H5Screate_simple(nd, count, nullptr);
+    H5Dwrite(d, type, mem, sp, H5P_DEFAULT, value);
+    H5Sclose(mem);
+    H5Sclose(sp);
+    H5Dclose(d);
+  };
+  const double nan = NAN;
+  const long long far = 1000000, twin = 0;
+  EXPECT_NE(error(variant("nanlast", [&](hid_t f) { edit_last_row(f, "/displacement", H5T_NATIVE_DOUBLE, &nan); }), c)
+                .find("holds a non-finite value"),
+            std::string::npos);
+  EXPECT_NE(error(variant("gidlast", [&](hid_t f) { edit_last_row(f, "/node_gid", H5T_NATIVE_LLONG, &far); }), c)
+                .find("holds 1000000, not a node of this mesh"),
+            std::string::npos);
+  EXPECT_NE(error(variant("gidtwin", [&](hid_t f) { edit_last_row(f, "/node_gid", H5T_NATIVE_LLONG, &twin); }), c)
+                .find("does not cover node"),
+            std::string::npos);
   SceneConfig other_steps = c;
   other_steps.params.loading.steps = 5;
   EXPECT_NE(error(good, other_steps).find("was written for 2 load steps; this scene has 5"), std::string::npos);

@@ -378,6 +378,22 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
   LoadState c;
   const std::string where = "restart file '" + path + "'";
   auto fail = [&](const std::string& why) { throw InputError(where + ": " + why, InputErrorKind::File); };
+  // Three phases, so that no rank throws while another waits in a collective call: (1) every rank reads
+  // and checks its own block of rows (collectively: a bad row on one rank is an error on all); (2) the
+  // blocks go to the ranks owning their nodes (Tpetra import: collective, throws nothing); (3) every
+  // rank checks that its nodes were all covered (collectively again).
+  int rank = 0, P = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &P);
+  const long long N = m.global_nodes;
+  const long long r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
+  std::vector<long long> gid(rows);
+  struct Field {
+    const char* name;
+    Vector* out;
+    std::vector<double> values;
+  };
+  std::vector<Field> fields{{"/displacement", &u, {}}};
   collectively(comm, [&] {
     std::error_code ec;
     if (!fs::exists(path, ec)) fail("does not exist");
@@ -385,8 +401,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     QuietHdf5 quiet;
     if (H5Fis_hdf5(path.c_str()) <= 0) fail("is not an HDF5 file");
     H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
-    H5Pset_fapl_mpio(fapl.id(), comm, MPI_INFO_NULL);
-    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());
+    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());  // each rank on its own: no collective open
     if (fid < 0) fail("is not a readable HDF5 file");
     H5 file(fid, H5Fclose, "open " + path);
     auto attribute = [&](const char* name, double lo, double hi) {
@@ -415,13 +430,17 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     c.cuts = H5Aexists(file.id(), "cuts") > 0 ? static_cast<int>(attribute("cuts", 0, 64)) : 0;
     if (c.load < static_cast<double>(c.step) / steps - 1e-12 || c.load > static_cast<double>(c.step + 1) / steps + 1e-12)
       fail("load " + std::to_string(c.load) + " does not lie within step " + std::to_string(c.step + 1) + " (corrupt file?)");
-    // Each rank reads a block of rows, whatever the layout that wrote them; the rows then go to the
-    // ranks owning their nodes (a Tpetra import by global id).
-    int rank = 0, P = 1;
-    MPI_Comm_rank(comm, &rank);
-    MPI_Comm_size(comm, &P);
-    const long long N = m.global_nodes;
-    const long long r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
+    // Written by runs with the extrapolating predictor; without it the next step starts unextrapolated.
+    if (previous && H5Aexists(file.id(), "previous_load") > 0) {
+      c.previous_load = attribute("previous_load", 0.0, c.load);
+      fields.push_back({"/previous_displacement", previous, {}});
+    }
+    if (velocity) {
+      if (H5Lexists(file.id(), "/velocity", H5P_DEFAULT) <= 0)
+        fail("has no /velocity: it was written by a quasi-static run, and this scene is dynamic");
+      fields.push_back({"/velocity", velocity, {}});
+    }
+    // Each rank reads a block of rows, whatever the layout that wrote them.
     auto read_block = [&](const char* name, hid_t type, int cols, void* out) {
       H5 d(H5Dopen2(file.id(), name, H5P_DEFAULT), H5Dclose, path + ": " + name);
       H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
@@ -435,56 +454,54 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
       }
       if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail(std::string("cannot read ") + name);
     };
-    std::vector<long long> gid(rows);
     if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
       read_block("/node_gid", H5T_NATIVE_LLONG, 1, gid.data());
-      for (long long g : gid)
-        if (g < 0 || g >= N) fail("/node_gid holds " + std::to_string(g) + ", not a node of this mesh (corrupt file?)");
+      for (long long k = 0; k < rows; ++k)
+        if (gid[k] < 0 || gid[k] >= N)
+          fail("/node_gid row " + std::to_string(r0 + k) + " holds " + std::to_string(gid[k]) +
+               ", not a node of this mesh (corrupt file?)");
     } else {
       for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;  // written before /node_gid existed: rows were ids
     }
-    std::vector<GO> dofs(3 * rows);
-    for (long long k = 0; k < rows; ++k)
-      for (int c = 0; c < 3; ++c) dofs[3 * k + c] = 3 * gid[k] + c;
-    const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                                                Teuchos::ArrayView<const GO>(dofs), 0, sys.comm()));
-    const Import import(block_map, u.getMap());
-    // One nodes x 3 dataset into a vector on u's map.
-    auto read_field = [&](const char* name, Vector& out) {
-      if (H5Lexists(file.id(), name, H5P_DEFAULT) <= 0) fail(std::string("has no ") + name + " dataset");
+    for (Field& f : fields) {
+      if (H5Lexists(file.id(), f.name, H5P_DEFAULT) <= 0) fail(std::string("has no ") + f.name + " dataset");
       {
-        H5 d(H5Dopen2(file.id(), name, H5P_DEFAULT), H5Dclose, path + ": " + name);
+        H5 d(H5Dopen2(file.id(), f.name, H5P_DEFAULT), H5Dclose, path + ": " + f.name);
         H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
         hsize_t dims[2] = {0, 0};
         if (H5Sget_simple_extent_ndims(sp.id()) != 2 || H5Sget_simple_extent_dims(sp.id(), dims, nullptr) != 2 ||
             dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
-          fail(std::string(name) + " does not have the shape nodes x 3 of this mesh");
+          fail(std::string(f.name) + " does not have the shape nodes x 3 of this mesh");
       }
-      std::vector<double> values(3 * rows);
-      read_block(name, H5T_NATIVE_DOUBLE, 3, values.data());
-      for (double d : values)
-        if (!std::isfinite(d)) fail(std::string(name) + " holds non-finite values (corrupt file?)");
-      Vector block(block_map);
-      {
-        auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
-        for (long long i = 0; i < 3 * rows; ++i) bv(i, 0) = values[i];
-      }
-      out.putScalar(NAN);
-      out.doImport(block, import, Tpetra::INSERT);
-      auto ov = out.getLocalViewHost(Tpetra::Access::ReadOnly);
-      for (std::size_t i = 0; i < ov.extent(0); ++i)
-        if (!std::isfinite(ov(i, 0))) fail(std::string(name) + " does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
-    };
-    read_field("/displacement", u);
-    // Written by runs with the extrapolating predictor; without it the next step starts unextrapolated.
-    if (previous && H5Aexists(file.id(), "previous_load") > 0) {
-      c.previous_load = attribute("previous_load", 0.0, c.load);
-      read_field("/previous_displacement", *previous);
+      f.values.resize(3 * rows);
+      read_block(f.name, H5T_NATIVE_DOUBLE, 3, f.values.data());
+      for (long long i = 0; i < 3 * rows; ++i)
+        if (!std::isfinite(f.values[i]))
+          fail(std::string(f.name) + " row " + std::to_string(r0 + i / 3) + " holds a non-finite value (corrupt file?)");
     }
-    if (velocity) {
-      if (H5Lexists(file.id(), "/velocity", H5P_DEFAULT) <= 0)
-        fail("has no /velocity: it was written by a quasi-static run, and this scene is dynamic");
-      read_field("/velocity", *velocity);
+  });
+  // The rows go to the ranks owning their nodes (a Tpetra import by global id).
+  std::vector<GO> dofs(3 * rows);
+  for (long long k = 0; k < rows; ++k)
+    for (int d = 0; d < 3; ++d) dofs[3 * k + d] = 3 * gid[k] + d;
+  const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                                              Teuchos::ArrayView<const GO>(dofs), 0, sys.comm()));
+  const Import import(block_map, u.getMap());
+  for (Field& f : fields) {
+    Vector block(block_map);
+    {
+      auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (long long i = 0; i < 3 * rows; ++i) bv(i, 0) = f.values[i];
+    }
+    f.out->putScalar(NAN);
+    f.out->doImport(block, import, Tpetra::INSERT);
+  }
+  collectively(comm, [&] {
+    for (const Field& f : fields) {
+      auto ov = f.out->getLocalViewHost(Tpetra::Access::ReadOnly);
+      for (std::size_t i = 0; i < ov.extent(0); ++i)
+        if (!std::isfinite(ov(i, 0)))
+          fail(std::string(f.name) + " does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
     }
   });
   return c;
