@@ -50,6 +50,7 @@ struct Header {
   long long reoriented = 0;
   std::vector<std::string> element_groups, node_groups;
   std::string source;
+  std::string error;  // rank 0's verdict on the file, so that every rank throws it together
 };
 
 void broadcast_header(Header& h, MPI_Comm comm) {
@@ -73,9 +74,10 @@ void broadcast_header(Header& h, MPI_Comm comm) {
   };
   strings(h.element_groups);
   strings(h.node_groups);
-  std::vector<std::string> src{h.source};
+  std::vector<std::string> src{h.source, h.error};
   strings(src);
   h.source = src[0];
+  h.error = src[1];
 }
 
 // The four stages of distribute_mesh, sharing the rank's view of the directory.
@@ -98,9 +100,10 @@ class Distribution {
       h_.node_groups = file.node_group_names;
       h_.source = file.format + " " + file.path;
       if (h_.node_groups.size() > 64 * kGroupWords)
-        throw InputError(file.path + ": more than " + std::to_string(64 * kGroupWords) + " node groups", InputErrorKind::BadMesh);
+        h_.error = file.path + ": more than " + std::to_string(64 * kGroupWords) + " node groups";
     }
     broadcast_header(h_, comm_);
+    if (!h_.error.empty()) throw InputError(h_.error, InputErrorKind::BadMesh);
     npe_ = h_.npe;
     dir0_ = block_begin(me_, h_.nodes, P_);
     if (h_.elements < P_)

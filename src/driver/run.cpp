@@ -293,6 +293,8 @@ int Simulation::run() {
     rec.load = static_cast<double>(k) / n;
     const StepOutcome outcome = advance(k, rec);
     if (outcome == StepOutcome::Failed) {
+      // The last converged state, restartable (e.g. with other solver settings), then its fields.
+      if (out.checkpoint_every() > 0) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
       write_step(k, at_.load);
       return code(ExitCode::NoConvergence);
     }
@@ -315,9 +317,10 @@ int Simulation::run() {
     out.log(rec);
     records_.push_back(rec);
     if (observer_) observer_(rec, u);
-    if (k % out.every() == 0 || k == n) write_step(k, rec.load);
+    // The checkpoint first: a step file that cannot be written must not cost the converged state.
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
     if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+    if (k % out.every() == 0 || k == n) write_step(k, rec.load);
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
       if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);

@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <regex>
 #include <sstream>
 
 namespace sinew {
@@ -106,6 +107,10 @@ void write_attribute(hid_t file, const char* name, double value) {
 
 // Opens a CSV log for writing with its header; on restart it keeps the rows of the steps up to the
 // checkpoint (a row written after it belongs to a step that will be computed again).
+// Opens a CSV log for appending. A new run writes its header aside and renames it into place; a restart
+// keeps the rows of the steps up to its checkpoint (a row written after it belongs to a step that will
+// be computed again), also written aside and renamed, so that a crash during the restart leaves the old
+// log whole.
 void open_csv(std::ofstream& out, const std::string& path, int restart_step, const std::string& header) {
   std::vector<std::string> keep;
   if (restart_step >= 0) {
@@ -113,13 +118,27 @@ void open_csv(std::ofstream& out, const std::string& path, int restart_step, con
     std::string line;
     if (std::getline(old, line))
       while (std::getline(old, line))
-        if (!line.empty() && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
+        if (!line.empty() && line.back() != '\r' && std::atoi(line.c_str()) <= restart_step) keep.push_back(line);
   }
-  out.open(path, std::ios::trunc);
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream fresh(tmp, std::ios::trunc);
+    if (!fresh) throw InputError("Output: cannot write " + tmp, InputErrorKind::File);
+    fresh << header << "\n";
+    for (const auto& l : keep) fresh << l << "\n";
+    fresh.flush();
+    if (!fresh) throw InputError("Output: writing " + tmp + " failed (disk full?)", InputErrorKind::File);
+  }
+  replace_durably(tmp, path);
+  out.open(path, std::ios::app);
   if (!out) throw InputError("Output: cannot write " + path, InputErrorKind::File);
-  out << header << "\n";
-  for (const auto& l : keep) out << l << "\n";
-  out.flush();
+}
+
+// Whether a file name is one Sinew writes aside (NAME.tmp next to NAME): the only .tmp files a new run
+// removes.
+bool own_temporary(const std::string& file, const std::string& scene) {
+  static const std::regex own(R"(((mesh(_layout\d+)?|checkpoint|step_\d{6})\.h5|(surface|skin)_\d{6}\.obj|(log|newton)\.csv)\.tmp)");
+  return std::regex_match(file, own) || file == scene + ".xdmf.tmp";
 }
 
 // Creates an HDF5 file for collective parallel writing.
@@ -157,9 +176,10 @@ Output::Output(const OutputParameters& params, const System& system, const std::
       std::error_code ec;
       fs::create_directories(dir_, ec);
       if (ec) throw InputError("Output: cannot create results folder '" + dir_ + "': " + ec.message(), InputErrorKind::File);
-      // Files a crash left half-written: never read, so remove them.
+      // Files a crash left half-written: never read, so remove them (only those Sinew names itself: the
+      // folder may be a user's, or /tmp).
       for (const auto& entry : fs::directory_iterator(dir_, ec))
-        if (entry.path().extension() == ".tmp") fs::remove(entry.path(), ec);
+        if (own_temporary(entry.path().filename().string(), name_)) fs::remove(entry.path(), ec);
       // On restart keep the rows of the steps up to the checkpoint (a row written after it belongs to
       // a step that will be computed again).
       open_csv(log_, dir_ + "/log.csv", restart_step,
@@ -326,7 +346,18 @@ void Output::log_newton(int step, double load, const NewtonIterate& it) {
 }
 
 void Output::log(const StepRecord& r) {
-  if (!root_) return;
+  // Collective: a row that cannot be written (disk full) stops every rank with a message.
+  collectively(raw_comm(*sys_.comm()), [&] {
+    if (!root_) return;
+    write_log_row(r);
+    log_.flush();
+    newton_log_.flush();
+    if (!log_ || !newton_log_) throw InputError("Output: writing " + dir_ + "/log.csv or newton.csv failed (disk full?)",
+                                                InputErrorKind::File);
+  });
+}
+
+void Output::write_log_row(const StepRecord& r) {
   const auto& s = r.solve;
   log_ << std::setprecision(10) << r.step << "," << r.load << "," << r.cuts << "," << s.newton_iterations << ","
        << s.linear_iterations << "," << s.initial_residual << "," << s.final_residual << "," << r.totals.energy << ","

@@ -119,7 +119,13 @@ std::vector<char> group_nodes(const Mesh& mesh, const Teuchos::Comm<int>& comm, 
 std::vector<int> select_region(const Mesh& mesh, const Teuchos::Comm<int>& comm, const RegionParameters& p,
                                const std::string& where) {
   const auto groups = p.groups();
-  if (groups.empty()) return select_nodes(mesh, predicate(mesh, p, where));
+  if (groups.empty()) {
+    // A surface file that one rank cannot read (or parse) is an error on every rank, not a hang in
+    // the next collective.
+    std::function<bool(const std::array<double, 3>&)> test;
+    collectively(raw_comm(comm), [&] { test = predicate(mesh, p, where); });
+    return select_nodes(mesh, test);
+  }
   std::vector<char> in(mesh.local_nodes(), 0);
   for (const auto& g : groups) {
     const auto one = group_nodes(mesh, comm, g, where);

@@ -154,7 +154,7 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
 Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where)
     : skinning_(p.skinning), falloff_(p.falloff) {
   std::map<std::string, std::vector<Rigid>> frames;
-  if (!p.motion_file.empty()) frames = read_motion_file(p.motion_file);
+  if (!p.motion_file.empty()) collectively(raw_comm(comm), [&] { frames = read_motion_file(p.motion_file); });
   std::size_t nframes = 0;
   for (const auto& [name, bp] : p.bones) {
     Bone b;

@@ -1,6 +1,7 @@
 // NOX + Thyra + Stratimikos + Belos + MueLu: the only translation unit that includes them. The pieces
 // NOX calls back (model evaluator, energy merit, energy line search, observer) share one SolveState per
 // solve: the Hessian policy and the last evaluation's totals.
+#include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 
@@ -25,6 +26,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 
 namespace sinew {
@@ -68,6 +70,8 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     nominal_.set_x(x0_);
     energy_scale_ = sys.stiffness_scale() * sys.reference_volume();
     points_ = static_cast<double>(sys.mesh().global_elements) * quadrature_points(sys.mesh().type);
+    if (const char* f = std::getenv("SINEW_FAULT_RANK"))
+      fault_ = std::string(f) == "all" || std::atoi(f) == sys.comm()->getRank();
   }
 
   void set_W_factory(const Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>>& f) { factory_ = f; }
@@ -107,6 +111,10 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     if (Teuchos::nonnull(out.get_W_op()))
       W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
     SolveState& s = *state_;
+    // Fault injection for the tests of error agreement across ranks: a Jacobian that throws on one rank
+    // ("all": on every rank), as a bad_alloc or a preconditioner's exception would.
+    if (W && fault_)
+      throw std::runtime_error("injected fault (SINEW_FAULT_RANK) on rank " + std::to_string(sys_.comm()->getRank()));
     std::optional<Projection> projection;
     // Exact where the policy says, except at inverted points (see HessianPolicy).
     if (W && s.policy.next_jacobian(s.last_f_norm, static_cast<double>(s.last.inverted) / points_, s.last.undefined > 0))
@@ -119,6 +127,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
   System& sys_;
   SolveState* state_ = nullptr;
   double energy_scale_ = 0.0, points_ = 1.0;  // quadrature points of the whole mesh
+  bool fault_ = false;
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
   Teuchos::RCP<Thyra::VectorBase<double>> x0_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> factory_;
@@ -403,8 +412,14 @@ struct NonlinearSolver::Impl {
   }
   double prec_seen = 0.0, linear_seen = 0.0;  // NOX's cumulative timers at the end of the previous solve
   std::function<bool()> interrupt;
+  // A communicator of its own for meet_or_abort (an exception inside the solve may hit one rank only).
+  MPI_Comm error_comm = MPI_COMM_NULL;
+  ~Impl() {
+    if (error_comm != MPI_COMM_NULL) MPI_Comm_free(&error_comm);
+  }
 
   Impl(System& s, const SolverParameters& p) : sys(s), params(p) {
+    MPI_Comm_dup(raw_comm(*s.comm()), &error_comm);
     nox = default_nox(s.comm()->getRank());
     nox.sublist("Line Search").set("Method", p.line_search);
     nox.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
@@ -563,6 +578,10 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     report.status = SolveStatus::SolverError;
     report.detail = e.what();
     if (report.detail.size() > 600) report.detail = report.detail.substr(0, 600) + "...";
+    // The other ranks must have met it too (a collective failure), or they wait in a call this rank
+    // left: then the job ends with the message rather than hanging.
+    const char* wait = std::getenv("SINEW_MEET_SECONDS");
+    meet_or_abort(m.error_comm, report.detail, wait ? std::atof(wait) : 60.0);
   }
   report.exact_hessian_used = state.policy.exact_used();
   report.exact_hessian_fell_back = state.policy.mode() == HessianPolicy::Mode::FellBack;

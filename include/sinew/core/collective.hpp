@@ -8,7 +8,10 @@
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <mpi.h>
 
+#include <cstdio>
+#include <algorithm>
 #include <cstring>
+#include <ctime>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -53,17 +56,46 @@ void collectively(MPI_Comm comm, Fn&& fn) {
   throw std::runtime_error(msg);
 }
 
+// For an error this rank met inside collective work that the other ranks may not share (an exception
+// from deep inside a linear solver or a preconditioner): waits up to `seconds` for every rank to meet
+// one too (a non-blocking barrier on `comm`, a communicator only such meetings use). When they all do,
+// it returns and the caller reports the error everywhere; when some do not, they are waiting in a
+// collective call this rank left, so it prints the message and ends the job (MPI_Abort): better than a
+// hang.
+inline void meet_or_abort(MPI_Comm comm, const std::string& message, double seconds) {
+  int size = 1, rank = 0;
+  MPI_Comm_size(comm, &size);
+  MPI_Comm_rank(comm, &rank);
+  if (size == 1) return;
+  MPI_Request request;
+  MPI_Ibarrier(comm, &request);
+  const double start = MPI_Wtime();
+  for (int done = 0;;) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    if (MPI_Wtime() - start > seconds) break;
+    struct timespec pause {0, 1000000};
+    nanosleep(&pause, nullptr);
+  }
+  std::fprintf(stderr, "sinew: error on rank %d that the other ranks did not meet within %g s: %s; aborting every rank\n", rank,
+               seconds, message.c_str());
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+}
+
 // send[r] goes to rank r; returns what each rank sent here, by source rank.
+// chunk_bytes: the bytes per pair and round (0: 1 GiB / P; tests make it small to exercise the rounds).
 template <class T>
-std::vector<std::vector<T>> alltoallv(MPI_Comm comm, const std::vector<std::vector<T>>& send) {
+std::vector<std::vector<T>> alltoallv(MPI_Comm comm, const std::vector<std::vector<T>>& send, long long chunk_bytes = 0) {
   static_assert(std::is_trivially_copyable_v<T>, "records are sent as bytes");
   int P = 1;
   MPI_Comm_size(comm, &P);
   std::vector<long long> sbytes(P), rbytes(P);
   for (int r = 0; r < P; ++r) sbytes[r] = static_cast<long long>(send[r].size() * sizeof(T));
   MPI_Alltoall(sbytes.data(), 1, MPI_LONG_LONG, rbytes.data(), 1, MPI_LONG_LONG, comm);
-  // Exchanged in chunks of at most 1 GB per pair, so that MPI's int counts never overflow.
-  const long long chunk = 1LL << 30;
+  // Exchanged in rounds of at most 1 GiB / P bytes per pair, so that MPI's int counts and displacements
+  // (summed over the ranks of a round) never overflow, whatever the number of ranks.
+  const long long chunk = chunk_bytes > 0 ? chunk_bytes : std::max(1LL, (1LL << 30) / P);
   std::vector<std::vector<T>> recv(P);
   for (int r = 0; r < P; ++r) recv[r].resize(static_cast<std::size_t>(rbytes[r]) / sizeof(T));
   for (long long offset = 0;; offset += chunk) {

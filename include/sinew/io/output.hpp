@@ -98,7 +98,7 @@ class Output {
   void write_step(int step, double load, const Vector& u, const NodeFields& node_fields = {});
   // Path of the surface OBJ of a step.
   std::string surface_file(int step) const;
-  // Rank 0 appends a row to log.csv.
+  // Collective: rank 0 appends a row to log.csv; a failed write is an error on every rank.
   void log(const StepRecord& r);
   // Rank 0 appends a row to newton.csv (`load`: the load fraction being solved for).
   void log_newton(int step, double load, const NewtonIterate& it);
@@ -122,6 +122,7 @@ class Output {
 
  private:
   void write_xdmf() const;
+  void write_log_row(const StepRecord& r);
 
   OutputParameters params_;
   const System& sys_;
