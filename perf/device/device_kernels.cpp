@@ -352,13 +352,16 @@ int test(int cells) {
               both_inf ? 0.0 : std::fabs(r.totals.energy - ref.totals.energy) / std::max(std::fabs(ref.totals.energy), 1e-300);
           const double dv = std::fabs(r.totals.volume - ref.totals.volume) / ref.totals.volume;
           const double df = rel(r.force, ref.force), dK = rel(r.values, ref.values);
-          const double d = std::max({de, dv, df, dK});
+          // nvcc contracts a*b+c into FMAs where the host compiler does not: min J differs in the last
+          // bits, so it is compared like everything else, relative to its size.
+          const double dJ = std::fabs(r.totals.min_J - ref.totals.min_J) / std::max(std::fabs(ref.totals.min_J), 1e-300);
+          const double d = std::max({de, dv, df, dK, dJ});
           worst = std::max(worst, d);
-          const bool ok = d < 1e-12 && r.totals.inverted == ref.totals.inverted && r.totals.min_J == ref.totals.min_J;
+          const bool ok = d < 1e-12 && r.totals.inverted == ref.totals.inverted;
           failures += !ok;
           const std::string what = std::string(tets ? "tet4 " : "hex8 ") + S[s].name + (v == Variant::PerPoint ? " per point" : "");
-          std::printf("%s %-28s %-22s vs Serial: energy %.1e volume %.1e force %.1e matrix %.1e inverted %lld/%lld\n",
-                      ok ? "ok  " : "FAIL", material_model_names()[k].c_str(), what.c_str(), de, dv, df, dK, r.totals.inverted,
+          std::printf("%s %-28s %-22s vs Serial: energy %.1e volume %.1e force %.1e matrix %.1e min J %.1e inverted %lld/%lld\n",
+                      ok ? "ok  " : "FAIL", material_model_names()[k].c_str(), what.c_str(), de, dv, df, dK, dJ, r.totals.inverted,
                       ref.totals.inverted);
         }
     }

@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
   const std::string bad = parse(argc, argv, cl);
   const bool speaker = launcher_rank_zero();
   if (!bad.empty()) {
-    if (speaker) std::cerr << "sinew: " << bad << "\n\n" << kUsage;
+    // One line that says what is wrong and where to look, not a page of usage to scroll past.
+    if (speaker) std::cerr << "sinew: " << bad << " (see 'sinew --help')\n";
     return sinew::code(ExitCode::Usage);
   }
   if (cl.help) {

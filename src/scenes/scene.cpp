@@ -9,6 +9,7 @@
 #include <Tpetra_Vector.hpp>
 
 #include <cmath>
+#include <type_traits>
 
 namespace sinew {
 
@@ -194,6 +195,8 @@ ContactDetection Scene::detect_contact(const Vector& u, bool keep) {
 void Scene::predict(double t0, double t1, Vector& u) const {
   if (skeleton_->empty() || !skeleton_->skinning()) return;
   auto v = u.getLocalViewHost(Tpetra::Access::ReadWrite);
+  // skin() reads the coordinates as packed xyz triples: a host mirror in LayoutRight.
+  static_assert(std::is_same_v<decltype(X_)::array_layout, Kokkos::LayoutRight>, "skin() needs xyz triples");
   skeleton_->skin(t0, t1, X_.data(), free_, v.data(), system_->mesh().n_owned_nodes);
 }
 
