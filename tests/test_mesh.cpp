@@ -120,7 +120,7 @@ TEST(MeshFile, EveryGmshFormatReadsTheSameBox) {
   EXPECT_NEAR(volume, 1.0, 1e-12);  // the unit cube, every element positively oriented after reading
   EXPECT_GT(smallest, 0.0);
   EXPECT_EQ(ref.element_group_names, std::vector<std::string>{"body"});
-  for (int g : ref.element_group) EXPECT_EQ(g, 0);
+  for (GroupMask g : ref.element_groups) EXPECT_EQ(g, 1u);
   const std::set<std::string> names(ref.node_group_names.begin(), ref.node_group_names.end());
   EXPECT_EQ(names, (std::set<std::string>{"bottom", "top", "sides", "edge", "corner"}));
   // Each group holds exactly the nodes on its geometry (box.geo: OCC box faces 5/6 are z = 0/1).
@@ -151,7 +151,7 @@ TEST(MeshFile, EveryGmshFormatReadsTheSameBox) {
     EXPECT_EQ(m.conn, ref.conn) << file;
     EXPECT_EQ(m.node_tag, ref.node_tag) << file;
     EXPECT_EQ(m.element_tag, ref.element_tag) << file;
-    EXPECT_EQ(m.element_group, ref.element_group) << file;
+    EXPECT_EQ(m.element_groups, ref.element_groups) << file;
     EXPECT_EQ(m.reoriented, ref.reoriented) << file;
     for (const auto& g : names) EXPECT_EQ(node_group(m, g), node_group(ref, g)) << file << " group " << g;
   }
@@ -178,9 +178,55 @@ TEST(MeshFile, HexahedraWithTwoVolumeGroups) {
   for (std::size_t e = 0; e < m.elements(); ++e) {
     double z = 0.0;
     for (int a = 0; a < 8; ++a) z += m.xyz[3 * m.conn[8 * e + a] + 2] / 8.0;
-    EXPECT_EQ(m.element_group_names[m.element_group[e]], z < 1.0 ? "lower" : "upper");
+    const int g = z < 1.0 ? 0 : 1;
+    EXPECT_EQ(m.element_group_names[g], z < 1.0 ? "lower" : "upper");
+    EXPECT_EQ(m.element_groups[e], GroupMask{1} << g);
   }
   EXPECT_EQ(node_group(m, "floor").size(), 16u);
+}
+
+TEST(MeshFile, AnElementInTwoVolumeGroupsIsInBothAndCountedOnce) {
+  // nested_groups.geo: "all" = both cubes, "tendon" = the second. MSH 4.1 lists each element once with
+  // its entity's groups; MSH 2.2 lists an element of the second cube twice (once per group, new tags).
+  const MeshFile v41 = read_mesh_file(mesh_path("nested_groups_v41.msh"));
+  const MeshFile v22 = read_mesh_file(mesh_path("nested_groups_v22.msh"));
+  for (const MeshFile* m : {&v41, &v22}) {
+    ASSERT_EQ(m->element_group_names, (std::vector<std::string>{"all", "tendon"})) << m->format;
+    EXPECT_EQ(m->elements(), 200u) << m->format;  // 100 per cube, none twice
+    double volume = 0.0, tendon = 0.0;
+    for (std::size_t e = 0; e < m->elements(); ++e) {
+      const double v = tet_volume(*m, e);
+      double x = 0.0;
+      for (int a = 0; a < 4; ++a) x += m->xyz[3 * m->conn[4 * e + a]] / 4.0;
+      EXPECT_EQ(m->element_groups[e], x < 1.0 ? 1u : 3u) << m->format << " element " << m->element_tag[e];
+      volume += v;
+      if (m->element_groups[e] & 2u) tendon += v;
+    }
+    EXPECT_NEAR(volume, 2.0, 1e-12) << m->format;  // was 3 for MSH 2.2: the second cube assembled twice
+    EXPECT_NEAR(tendon, 1.0, 1e-12) << m->format;
+  }
+  EXPECT_EQ(v22.merged, 100);
+  EXPECT_EQ(v41.merged, 0);
+  // The run's header says what reading changed.
+  ASSERT_FALSE(v22.notes.empty());
+  EXPECT_NE(v22.notes.back().find("100 repeated copies of elements in several volume groups merged"), std::string::npos)
+      << v22.notes.back();
+}
+
+TEST(MeshFile, AnElementListedTwiceOrATagUsedTwiceIsAnError) {
+  const std::string head = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n";
+  auto expect_error = [&](const std::string& name, const std::string& elements, const std::string& what) {
+    try {
+      read_mesh_file(write_file(name, head + "$Elements\n" + elements + "$EndElements\n"));
+      ADD_FAILURE() << name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.kind, InputErrorKind::BadMesh);
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  // The same tet twice (its nodes in another order), in the same group: it would be assembled twice.
+  expect_error("same_element.msh", "2\n1 4 2 1 1 1 2 3 4\n2 4 2 1 1 2 1 4 3\n", "elements 1 and 2 have the same nodes");
+  expect_error("same_tag.msh", "2\n7 4 2 1 1 1 2 3 4\n7 4 2 1 1 2 3 4 5\n", "element tag 7 is used by two different elements");
 }
 
 TEST(MeshFile, NegativelyOrientedElementsAreReorderedAndCounted) {
@@ -714,6 +760,106 @@ TEST(Voxelize, SurfacesAreReadCheckedClosedAndFilled) {
   if (world()->getRank() == 0)
     std::printf("[ info ] ball voxelized at h = 0.125: %zu cells, volume %.4f of %.4f; inscribed radius %.4f\n", kept, V,
                 ball_volume, r_in);
+}
+
+namespace {
+
+// Axis-aligned boxes [lo, hi] as one OBJ, every box written outward (or inward where flip says).
+struct Box {
+  double lo[3], hi[3];
+  bool flip = false;
+};
+std::string boxes_obj(const std::vector<Box>& boxes) {
+  std::string out;
+  const int q[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  int base = 1;
+  for (const Box& b : boxes) {
+    for (int v = 0; v < 8; ++v) {
+      const int bit[3] = {(v == 1 || v == 2 || v == 5 || v == 6), (v == 2 || v == 3 || v == 6 || v == 7), v >= 4};
+      out += "v";
+      for (int d = 0; d < 3; ++d) out += " " + std::to_string(bit[d] ? b.hi[d] : b.lo[d]);
+      out += "\n";
+    }
+    for (const auto& f : q) {
+      const int a = base + f[0], c = base + f[2];
+      const int p = base + (b.flip ? f[3] : f[1]), r = base + (b.flip ? f[1] : f[3]);
+      out += "f " + std::to_string(a) + " " + std::to_string(p) + " " + std::to_string(c) + " " + std::to_string(r) + "\n";
+    }
+    base += 8;
+  }
+  return out;
+}
+
+// Signed volume of the triangles of a surface whose first vertex is a corner of the box.
+double shell_volume(const TriangleSurface& s, const Box& b) {
+  double v = 0.0;
+  for (const auto& T : s.triangles) {
+    const auto &a = s.vertices[T[0]], &p = s.vertices[T[1]], &c = s.vertices[T[2]];
+    bool in = true;
+    for (int d = 0; d < 3; ++d) in = in && (std::fabs(a[d] - b.lo[d]) < 1e-12 || std::fabs(a[d] - b.hi[d]) < 1e-12);
+    if (in) v += (a[0] * (p[1] * c[2] - p[2] * c[1]) - a[1] * (p[0] * c[2] - p[2] * c[0]) + a[2] * (p[0] * c[1] - p[1] * c[0])) / 6.0;
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST(Voxelize, EveryShellIsTurnedOutOfTheMaterialACavityInward) {
+  // A hollow box (outer [0,3]^3, cavity [1,2]^3) with an island box inside the cavity, each shell
+  // written with the orientation an exporter might choose; the material's outward normal is the
+  // outer shell's outward one, the cavity's inward one (into the hole), the island's outward one.
+  for (const bool flip : {false, true}) {
+    const Box outer{{0, 0, 0}, {3, 3, 3}, flip}, cavity{{1, 1, 1}, {2, 2, 2}, false}, island{{1.25, 1.25, 1.25}, {1.75, 1.75, 1.75}, !flip};
+    const TriangleSurface s = read_triangle_surface(write_file("hollow.obj", boxes_obj({outer, cavity, island})));
+    EXPECT_NEAR(shell_volume(s, outer), 27.0, 1e-9) << "outer shell";
+    EXPECT_NEAR(shell_volume(s, cavity), -1.0, 1e-9) << "cavity";
+    EXPECT_NEAR(shell_volume(s, island), 0.125, 1e-9) << "island";
+  }
+}
+
+TEST(Voxelize, OnlyTheLargestFaceConnectedPieceIsKeptAndTheRestIsNotedOrRefused) {
+  // A 4x4x4-cell cube and a one-cell box beside it: the stray cell is removed and the header says so.
+  const Lattice L = voxelize(read_triangle_surface(write_file("stray.obj", boxes_obj({{{0, 0, 0}, {1, 1, 1}}, {{1.3, 1.3, 1.3}, {1.55, 1.55, 1.55}}}))), 0.25);
+  EXPECT_EQ(L.mesh.elements(), 64u);
+  EXPECT_EQ(L.mesh.nodes(), 125u);
+  ASSERT_EQ(L.mesh.notes.size(), 1u);
+  EXPECT_NE(L.mesh.notes[0].find("1 of 65 cells inside the surface removed"), std::string::npos) << L.mesh.notes[0];
+  // Two bodies of the same size: which one to simulate is not Sinew's guess.
+  try {
+    voxelize(read_triangle_surface(write_file("twins.obj", boxes_obj({{{0, 0, 0}, {1, 1, 1}}, {{2, 0, 0}, {3, 1, 1}}}))), 0.25);
+    ADD_FAILURE() << "two separate bodies were voxelized as one";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("form 2 pieces joined by no face (the largest has 64 of 128 cells)"), std::string::npos) << e.what();
+  }
+  // Two cubes touching along an edge only would hinge on a line of nodes: also two pieces.
+  try {
+    voxelize(read_triangle_surface(write_file("hinge.obj", boxes_obj({{{0, 0, 0}, {1, 1, 1}}, {{1, 1, 0}, {2, 2, 1}}}))), 0.25);
+    ADD_FAILURE() << "two cubes joined by an edge were voxelized as one body";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pieces joined by no face"), std::string::npos) << e.what();
+  }
+  // A cell size that would overflow the lattice's counts is refused before any allocation.
+  const TriangleSurface cube = read_triangle_surface(write_file("cube_tiny.stl", cube_stl(false)));
+  for (const double h : {1e-4, 1e-300}) {
+    try {
+      voxelize(cube, h);
+      ADD_FAILURE() << "cell size " << h << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("choose a larger cell size"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Voxelize, ATruncatedBinaryStlIsNamedAsSuch) {
+  std::string stl = cube_stl(true);
+  stl.resize(stl.size() - 30);
+  try {
+    read_triangle_surface(write_file("cut.stl", stl));
+    ADD_FAILURE() << "a truncated binary STL was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 12 triangles, which take 684 bytes, has 654 bytes (truncated?)"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {

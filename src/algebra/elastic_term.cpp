@@ -24,7 +24,7 @@ ElasticTerm::ElasticTerm(const Mesh& mesh, const ElementData& elements, const Ma
     if (it == names.end()) throw unknown_group("Material/" + name, name, {}, names);
     const int group = static_cast<int>(it - names.begin());
     for (std::size_t e = 0; e < ne; ++e)
-      if (!mesh_.element_group.empty() && mesh_.element_group[e] == group) block_of[e] = static_cast<int>(laws.size());
+      if (mesh_.in_group(e, group)) block_of[e] = static_cast<int>(laws.size());
     laws.push_back(law);
   }
   for (std::size_t b = 0; b < laws.size(); ++b) {
@@ -43,6 +43,17 @@ double ElasticTerm::stiffness_scale() const {
   double s = 0.0;
   for (const auto& b : blocks_) s = std::max(s, b.law.mu_L + std::fabs(b.law.lambda_L));
   return s;
+}
+
+std::vector<long long> ElasticTerm::owned_region_elements() const {
+  std::vector<long long> n;
+  for (std::size_t b = 1; b < blocks_.size(); ++b) {
+    auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), blocks_[b].elements);
+    long long k = 0;
+    for (std::size_t i = 0; i < h.extent(0); ++i) k += static_cast<std::size_t>(h(i)) < mesh_.n_owned_elements;
+    n.push_back(k);
+  }
+  return n;
 }
 
 std::vector<double> ElasticTerm::element_density() const {

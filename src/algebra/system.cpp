@@ -38,6 +38,20 @@ System::System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const Mat
     : comm_(std::move(comm)), mesh_(std::move(mesh)) {
   elements_ = compute_element_data(mesh_, *comm_);
   elastic_ = std::make_shared<ElasticTerm>(mesh_, elements_, materials);
+  // A law that no element takes is a mistake the user cannot see in the results: the group is empty,
+  // or a region listed after it holds all its elements (the last region listed wins).
+  std::vector<long long> mine = elastic_->owned_region_elements(), all(mine.size(), 0);
+  if (!mine.empty()) Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, static_cast<int>(mine.size()), mine.data(), all.data());
+  for (std::size_t k = 0; k < all.size(); ++k)
+    if (all[k] == 0) {
+      const std::string& name = materials.regions[k].first;
+      std::string later;
+      for (std::size_t j = k + 1; j < materials.regions.size(); ++j) later += (later.empty() ? "'" : ", '") + materials.regions[j].first + "'";
+      throw InputError("Material/" + name + ": no element takes this law: the volume group '" + name + "' " +
+                       (later.empty() ? std::string("has no element")
+                                      : "has no element, or each of its elements is also in a region listed after it (" + later +
+                                            "), and an element takes the law of the last region listed that holds it"));
+    }
   const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
   std::vector<GO> owned_node_gids(mesh_.node_gid.begin(), mesh_.node_gid.begin() + n_owned);
   owned_nodes_ = make_map(owned_node_gids, comm_);

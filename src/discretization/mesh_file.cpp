@@ -51,6 +51,21 @@ class Source {
  public:
   explicit Source(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "rb"), &std::fclose) {
     if (!file_) throw InputError(path + ": cannot open mesh file", InputErrorKind::File);
+    std::error_code ec;
+    size_ = static_cast<long long>(std::filesystem::file_size(path, ec));
+    if (ec) size_ = 0;
+  }
+
+  // A count the file declares, checked before anything is reserved for it: each item needs at least
+  // `min_bytes` of what is left of the file, so a corrupt or hostile header (999999999999 nodes) is an
+  // error naming its line, not an allocation failure.
+  long long count(long long v, long long min_bytes, const char* what) {
+    if (v < 0) fail(std::string("a negative count (") + what + ": " + std::to_string(v) + ")");
+    const long long left = std::max(0LL, size_ - offset_);
+    if (v > left / std::max(1LL, min_bytes))
+      fail(std::string("declares ") + std::to_string(v) + " " + what + " but the " + std::to_string(left) +
+           " bytes left in the file can hold at most " + std::to_string(left / std::max(1LL, min_bytes)) + " (corrupt or truncated?)");
+    return v;
   }
 
   [[noreturn]] void fail(const std::string& why) const {
@@ -64,6 +79,7 @@ class Source {
   int get() {
     if (!fill(1)) return EOF;
     const char c = buf_[pos_++];
+    ++offset_;
     if (c == '\n') ++line_;
     return static_cast<unsigned char>(c);
   }
@@ -116,6 +132,7 @@ class Source {
         if (buf_[pos_ + i] == '\n') ++line_;
       std::memcpy(out, buf_.data() + pos_, k);
       pos_ += k;
+      offset_ += static_cast<long long>(k);
       out += k;
       n -= k;
     }
@@ -153,6 +170,7 @@ class Source {
   std::vector<char> buf_ = std::vector<char>(1 << 20);
   std::size_t pos_ = 0, len_ = 0;
   long line_ = 1;
+  long long size_ = 0, offset_ = 0;  // the file's size and the bytes consumed
 };
 
 // Node tag -> index into the nodes as read: a dense table when tags are compact, else a hash map.
@@ -197,7 +215,9 @@ struct Raw {
   int volume_type = 0;                     // Gmsh type of the volume elements
   std::vector<long long> vol_nodes;        // node tags, npe per element
   std::vector<long long> vol_tags;
-  std::vector<int> vol_physical;           // physical tag, 0: none
+  std::vector<GroupMask> vol_groups;       // the volume groups of each element, a bit each
+  std::map<int, int> bit_of_physical;      // volume physical tag -> its bit
+  std::vector<int> physical_of_bit;
   std::map<std::pair<int, int>, std::vector<long long>> group_node_tags;  // (dim, physical) -> node tags
   bool have_nodes = false, have_elements = false;
 };
@@ -206,6 +226,22 @@ std::string group_name(const Raw& r, int dim, int tag) {
   const auto it = r.physical_names.find({dim, tag});
   return it != r.physical_names.end() ? it->second : std::to_string(tag);
 }
+
+// The bit of a volume physical group, given on first sight (named groups first, in tag order).
+int group_bit(Source& s, Raw& r, int physical) {
+  if (const auto it = r.bit_of_physical.find(physical); it != r.bit_of_physical.end()) return it->second;
+  if (static_cast<int>(r.physical_of_bit.size()) >= kMaxVolumeGroups)
+    s.fail("more than " + std::to_string(kMaxVolumeGroups) + " volume physical groups; Sinew supports at most " +
+           std::to_string(kMaxVolumeGroups));
+  const int bit = static_cast<int>(r.physical_of_bit.size());
+  r.bit_of_physical[physical] = bit;
+  r.physical_of_bit.push_back(physical);
+  return bit;
+}
+
+// Size of the smallest record, to bound declared counts (Source::count): ASCII needs at least one
+// digit and a separator per integer, binary its full width.
+long long min_bytes(const Raw& r, int ascii, int binary) { return r.binary ? binary : ascii; }
 
 void read_format(Source& s, Raw& r) {
   if (s.next_line() != "$MeshFormat") s.fail("not a Gmsh mesh: it does not start with $MeshFormat");
@@ -228,7 +264,7 @@ void read_format(Source& s, Raw& r) {
 }
 
 void read_physical_names(Source& s, Raw& r) {
-  const long long n = s.integer("number of physical names");
+  const long long n = s.count(s.integer("number of physical names"), 6, "physical names");
   for (long long k = 0; k < n; ++k) {
     const int dim = static_cast<int>(s.integer("physical dimension"));
     const int tag = static_cast<int>(s.integer("physical tag"));
@@ -237,6 +273,8 @@ void read_physical_names(Source& s, Raw& r) {
     if (a == std::string::npos || b == a) s.fail("a physical name must be quoted");
     r.physical_names[{dim, tag}] = rest.substr(a + 1, b - a - 1);
   }
+  for (const auto& [key, name] : r.physical_names)
+    if (key.first == 3) group_bit(s, r, key.second);
   s.expect_end("PhysicalNames");
 }
 
@@ -254,16 +292,16 @@ double read_real(Source& s, const Raw& r, const char* what) {
 
 void read_entities(Source& s, Raw& r) {
   long long counts[4];
-  for (auto& c : counts) c = read_size(s, r, "number of entities");
+  for (auto& c : counts) c = s.count(read_size(s, r, "number of entities"), min_bytes(r, 8, 28), "entities");
   for (int dim = 0; dim < 4; ++dim)
     for (long long k = 0; k < counts[dim]; ++k) {
       const int tag = static_cast<int>(read_int(s, r, "entity tag"));
       for (int c = 0; c < (dim == 0 ? 3 : 6); ++c) read_real(s, r, "entity bounding box");
-      const long long nphys = read_size(s, r, "number of physical tags");
+      const long long nphys = s.count(read_size(s, r, "number of physical tags"), min_bytes(r, 2, 4), "physical tags");
       auto& phys = r.entity_physicals[{dim, tag}];
       for (long long p = 0; p < nphys; ++p) phys.push_back(static_cast<int>(read_int(s, r, "physical tag")));
       if (dim > 0) {
-        const long long nb = read_size(s, r, "number of bounding entities");
+        const long long nb = s.count(read_size(s, r, "number of bounding entities"), min_bytes(r, 2, 4), "bounding entities");
         for (long long b = 0; b < nb; ++b) read_int(s, r, "bounding entity");
       }
     }
@@ -280,7 +318,7 @@ void read_nodes(Source& s, Raw& r) {
   if (r.have_nodes) s.fail("a second $Nodes section");
   r.have_nodes = true;
   if (r.version < 4.0) {
-    const long long n = s.integer("number of nodes");
+    const long long n = s.count(s.integer("number of nodes"), min_bytes(r, 8, 28), "nodes");
     r.node_tags.reserve(n);
     r.xyz.reserve(3 * n);
     if (r.binary) s.line();
@@ -292,7 +330,8 @@ void read_nodes(Source& s, Raw& r) {
     s.expect_end("Nodes");
     return;
   }
-  const long long blocks = read_size(s, r, "number of node blocks"), n = read_size(s, r, "number of nodes");
+  const long long blocks = s.count(read_size(s, r, "number of node blocks"), min_bytes(r, 8, 20), "node blocks");
+  const long long n = s.count(read_size(s, r, "number of nodes"), min_bytes(r, 8, 32), "nodes");
   const long long min_tag = read_size(s, r, "minimum node tag"), max_tag = read_size(s, r, "maximum node tag");
   r.index.reserve(min_tag, max_tag, static_cast<std::size_t>(n));
   r.node_tags.reserve(n);
@@ -302,7 +341,7 @@ void read_nodes(Source& s, Raw& r) {
     const int dim = static_cast<int>(read_int(s, r, "entity dimension"));
     read_int(s, r, "entity tag");
     const int parametric = static_cast<int>(read_int(s, r, "parametric flag"));
-    const long long count = read_size(s, r, "nodes in block");
+    const long long count = s.count(read_size(s, r, "nodes in block"), min_bytes(r, 8, 32), "nodes");
     tags.resize(count);
     for (auto& t : tags) t = read_size(s, r, "node tag");
     const int extra = parametric ? dim : 0;
@@ -328,7 +367,10 @@ void take_element(Source& s, Raw& r, const GmshType& t, long long tag, const std
     r.volume_type = t.id;
     r.vol_tags.push_back(tag);
     r.vol_nodes.insert(r.vol_nodes.end(), nodes, nodes + t.nodes);
-    r.vol_physical.push_back(physicals.empty() ? 0 : physicals.front());
+    GroupMask mask = 0;
+    for (int p : physicals)
+      if (p != 0) mask |= GroupMask{1} << group_bit(s, r, p);
+    r.vol_groups.push_back(mask);
     return;
   }
   for (int p : physicals) {
@@ -342,14 +384,14 @@ void read_elements(Source& s, Raw& r) {
   r.have_elements = true;
   std::vector<long long> nodes(128);
   if (r.version < 4.0) {
-    const long long n = s.integer("number of elements");
+    const long long n = s.count(s.integer("number of elements"), 8, "elements");
     if (!r.binary) {
       for (long long k = 0; k < n; ++k) {
         const long long tag = s.integer("element tag");
         const int type = static_cast<int>(s.integer("element type"));
         const GmshType* t = gmsh_type(type);
         if (!t) s.fail("element " + std::to_string(tag) + " has unknown Gmsh type " + std::to_string(type));
-        const long long ntags = s.integer("number of tags");
+        const long long ntags = s.count(s.integer("number of tags"), 2, "element tags");
         std::vector<int> physicals;
         for (long long j = 0; j < ntags; ++j) {
           const long long v = s.integer("tag");
@@ -366,7 +408,8 @@ void read_elements(Source& s, Raw& r) {
         const int ntags = s.binary<std::int32_t>("number of tags");
         const GmshType* t = gmsh_type(type);
         if (!t) s.fail("unknown Gmsh element type " + std::to_string(type));
-        if (count <= 0 || ntags < 0 || done + count > n) s.fail("a corrupt element block header");
+        if (count <= 0 || ntags < 0 || ntags > 1000 || done + count > n) s.fail("a corrupt element block header");
+        s.count(count, 4LL * (1 + ntags + t->nodes), "elements");
         std::vector<std::int32_t> rec(1 + ntags + t->nodes);
         for (int k = 0; k < count; ++k) {
           s.bytes(rec.data(), rec.size() * sizeof(std::int32_t), "element");
@@ -381,7 +424,7 @@ void read_elements(Source& s, Raw& r) {
     s.expect_end("Elements");
     return;
   }
-  const long long blocks = read_size(s, r, "number of element blocks");
+  const long long blocks = s.count(read_size(s, r, "number of element blocks"), min_bytes(r, 8, 20), "element blocks");
   for (int k = 0; k < 3; ++k) read_size(s, r, "element count or tag range");
   std::vector<std::uint64_t> rec;
   for (long long b = 0; b < blocks; ++b) {
@@ -391,6 +434,7 @@ void read_elements(Source& s, Raw& r) {
     const long long count = read_size(s, r, "elements in block");
     const GmshType* t = gmsh_type(type);
     if (!t) s.fail("unknown Gmsh element type " + std::to_string(type));
+    s.count(count, min_bytes(r, 2, 8) * (1 + t->nodes), "elements");
     if (t->dim != dim) s.fail(std::string(t->name) + " elements in an entity of dimension " + std::to_string(dim));
     const auto it = r.entity_physicals.find({dim, entity});
     const std::vector<int> physicals = it == r.entity_physicals.end() ? std::vector<int>() : it->second;
@@ -494,12 +538,72 @@ bool orient(const std::string& path, long long tag, double* X, int* conn) {
   return flipped;
 }
 
+// The same element listed twice. MSH 2.2 writes an element once per volume group it belongs to (with
+// a new tag each time): copies in different groups are merged into one element in all of them. Copies
+// in the same groups would be assembled twice: an error, as is one tag used for two elements.
+long long merge_duplicates(const std::string& path, Raw& r, int npe) {
+  const std::size_t ne = r.vol_tags.size();
+  std::vector<long long> sorted(static_cast<std::size_t>(npe) * ne);
+  std::vector<std::pair<std::uint64_t, std::size_t>> key(ne);
+  for (std::size_t e = 0; e < ne; ++e) {
+    long long* s = &sorted[npe * e];
+    std::copy_n(&r.vol_nodes[npe * e], npe, s);
+    std::sort(s, s + npe);
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the sorted node tags
+    for (int a = 0; a < npe; ++a) h = (h ^ static_cast<std::uint64_t>(s[a])) * 1099511628211ull;
+    key[e] = {h, e};
+  }
+  std::sort(key.begin(), key.end());
+  std::vector<char> drop(ne, 0);
+  long long merged = 0;
+  for (std::size_t i = 0; i < ne;) {
+    std::size_t j = i + 1;
+    while (j < ne && key[j].first == key[i].first) ++j;
+    for (std::size_t a = i; a < j; ++a)
+      for (std::size_t b = a + 1; b < j; ++b) {
+        const std::size_t keep = std::min(key[a].second, key[b].second), copy = std::max(key[a].second, key[b].second);
+        if (drop[keep] || drop[copy] || !std::equal(&sorted[npe * keep], &sorted[npe * keep] + npe, &sorted[npe * copy])) continue;
+        if ((r.vol_groups[copy] & ~r.vol_groups[keep]) == 0)
+          throw InputError(path + ": elements " + std::to_string(r.vol_tags[keep]) + " and " + std::to_string(r.vol_tags[copy]) +
+                               " have the same nodes (the element is listed twice and would count twice)",
+                           InputErrorKind::BadMesh);
+        r.vol_groups[keep] |= r.vol_groups[copy];
+        drop[copy] = 1;
+        ++merged;
+      }
+    i = j;
+  }
+  std::vector<std::pair<long long, std::size_t>> tags;
+  tags.reserve(ne);
+  for (std::size_t e = 0; e < ne; ++e)
+    if (!drop[e]) tags.emplace_back(r.vol_tags[e], e);
+  std::sort(tags.begin(), tags.end());
+  for (std::size_t k = 1; k < tags.size(); ++k)
+    if (tags[k].first == tags[k - 1].first)
+      throw InputError(path + ": element tag " + std::to_string(tags[k].first) + " is used by two different elements",
+                       InputErrorKind::BadMesh);
+  if (merged == 0) return 0;
+  std::size_t out = 0;
+  for (std::size_t e = 0; e < ne; ++e) {
+    if (drop[e]) continue;
+    r.vol_tags[out] = r.vol_tags[e];
+    r.vol_groups[out] = r.vol_groups[e];
+    std::copy_n(&r.vol_nodes[npe * e], npe, &r.vol_nodes[npe * out]);
+    ++out;
+  }
+  r.vol_tags.resize(out);
+  r.vol_groups.resize(out);
+  r.vol_nodes.resize(npe * out);
+  return merged;
+}
+
 MeshFile compact(const std::string& path, Raw& r) {
   MeshFile m;
   m.path = path;
   m.format = std::string("Gmsh MSH ") + (r.version > 4.0 ? "4.1" : "2.2") + (r.binary ? " binary" : " ASCII");
   m.type = r.volume_type == 5 ? ElementType::Hex8 : ElementType::Tet4;
   const int npe = nodes_per_element(m.type);
+  m.merged = merge_duplicates(path, r, npe);
   const std::size_t ne = r.vol_tags.size();
   // Nodes used by volume elements, numbered in file order.
   std::vector<int> compact_of(r.node_tags.size(), -1);
@@ -528,13 +632,8 @@ MeshFile compact(const std::string& path, Raw& r) {
   // Volume elements, oriented, with their volume group.
   m.conn.resize(npe * ne);
   m.element_tag = r.vol_tags;
-  m.element_group.assign(ne, -1);
-  std::map<int, int> group_of_physical;
-  for (const auto& [key, name] : r.physical_names)
-    if (key.first == 3) {
-      group_of_physical[key.second] = static_cast<int>(m.element_group_names.size());
-      m.element_group_names.push_back(name);
-    }
+  m.element_groups = r.vol_groups;  // bit g: the g-th volume group (named ones first, in tag order)
+  for (int p : r.physical_of_bit) m.element_group_names.push_back(group_name(r, 3, p));
   double X[3 * 8];
   for (std::size_t e = 0; e < ne; ++e) {
     int* c = &m.conn[npe * e];
@@ -544,15 +643,6 @@ MeshFile compact(const std::string& path, Raw& r) {
     }
     const bool flipped = m.type == ElementType::Hex8 ? orient<Hex8>(path, m.element_tag[e], X, c) : orient<Tet4>(path, m.element_tag[e], X, c);
     if (flipped) ++m.reoriented;
-    const int p = r.vol_physical[e];
-    if (p != 0) {
-      auto it = group_of_physical.find(p);
-      if (it == group_of_physical.end()) {  // an unnamed physical group: named by its number
-        it = group_of_physical.emplace(p, static_cast<int>(m.element_group_names.size())).first;
-        m.element_group_names.push_back(std::to_string(p));
-      }
-      m.element_group[e] = it->second;
-    }
   }
   // Node groups from the lower-dimensional physical groups, on the nodes the volume mesh uses.
   std::map<std::string, std::set<int>> groups;
@@ -571,6 +661,16 @@ MeshFile compact(const std::string& path, Raw& r) {
     m.node_group_names.push_back(name);
     m.node_group_nodes.emplace_back(nodes.begin(), nodes.end());
   }
+  // What reading changed, for the run's header (a user should know the mesh is not the file verbatim).
+  if (m.reoriented > 0)
+    m.notes.push_back(std::to_string(m.reoriented) + " negatively oriented element" + (m.reoriented > 1 ? "s" : "") +
+                      " reordered to positive orientation");
+  if (m.merged > 0)
+    m.notes.push_back(std::to_string(m.merged) + " repeated cop" + (m.merged > 1 ? "ies" : "y") +
+                      " of elements in several volume groups merged (each element counts once)");
+  if (static_cast<std::size_t>(n) < compact_of.size())
+    m.notes.push_back(std::to_string(compact_of.size() - n) + " node" + (compact_of.size() - n > 1 ? "s" : "") +
+                      " no volume element uses left out");
   return m;
 }
 

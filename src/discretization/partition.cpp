@@ -21,8 +21,7 @@ namespace {
 struct ElementRecord {
   GlobalId gid;
   long long tag;
-  int group;
-  int pad;
+  GroupMask groups;
   GlobalId nodes[8];
 };
 
@@ -48,7 +47,7 @@ struct Header {
   int type = 0, npe = 0;
   GlobalId nodes = 0, elements = 0;
   long long reoriented = 0;
-  std::vector<std::string> element_groups, node_groups;
+  std::vector<std::string> element_groups, node_groups, notes;
   std::string source;
   std::string error;  // rank 0's verdict on the file, so that every rank throws it together
 };
@@ -74,6 +73,7 @@ void broadcast_header(Header& h, MPI_Comm comm) {
   };
   strings(h.element_groups);
   strings(h.node_groups);
+  strings(h.notes);
   std::vector<std::string> src{h.source, h.error};
   strings(src);
   h.source = src[0];
@@ -98,6 +98,7 @@ class Distribution {
       h_.reoriented = file.reoriented;
       h_.element_groups = file.element_group_names;
       h_.node_groups = file.node_group_names;
+      h_.notes = file.notes;
       h_.source = file.format + " " + file.path;
       if (h_.node_groups.size() > 64 * kGroupWords)
         h_.error = file.path + ": more than " + std::to_string(64 * kGroupWords) + " node groups";
@@ -120,7 +121,7 @@ class Distribution {
     if (me_ == 0) {
       for (int r = 0; r < P_; ++r)
         for (GlobalId e = block_begin(r, h_.elements, P_); e < block_begin(r + 1, h_.elements, P_); ++e) {
-          ElementRecord rec{e, file.element_tag[e], file.element_group[e], 0, {}};
+          ElementRecord rec{e, file.element_tag[e], file.element_groups[e], {}};
           double c[3] = {0.0, 0.0, 0.0};
           for (int a = 0; a < npe_; ++a) {
             const int n = file.conn[npe_ * e + a];
@@ -211,6 +212,7 @@ class Distribution {
     m.global_elements = h_.elements;
     m.source = h_.source;
     m.reoriented = h_.reoriented;
+    m.notes = h_.notes;
     m.element_group_names = h_.element_groups;
     m.node_group_names = h_.node_groups;
     const std::vector<int> local_of = fill_nodes(m, all_nodes, data);
@@ -288,14 +290,14 @@ class Distribution {
     m.n_owned_elements = mine_.size();
     m.element_gid.resize(ne);
     m.element_tag.resize(ne);
-    m.element_group.resize(ne);
+    m.element_groups.resize(ne);
     m.conn = Kokkos::View<int**>("conn", ne, npe_);
     auto Ch = Kokkos::create_mirror_view(m.conn);
     for (std::size_t e = 0; e < ne; ++e) {
       const ElementRecord& rec = e < mine_.size() ? mine_[e] : ghosts_[e - mine_.size()];
       m.element_gid[e] = rec.gid;
       m.element_tag[e] = rec.tag;
-      m.element_group[e] = rec.group;
+      m.element_groups[e] = rec.groups;
       for (int a = 0; a < npe_; ++a)
         Ch(e, a) = local_of[std::lower_bound(all_nodes.begin(), all_nodes.end(), rec.nodes[a]) - all_nodes.begin()];
     }

@@ -4,6 +4,7 @@
 #include <sinew/discretization/triangle_surface.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -70,6 +71,14 @@ void read_stl(std::ifstream& in, TriangleSurface& s) {
   const auto size = static_cast<long long>(in.tellg());
   // Binary when the size matches its triangle count (some binary files start with "solid" too).
   const bool binary = in && size == 84 + 50LL * count;
+  // ASCII STL starts with "solid"; a file that does not and whose size disagrees with its count is a
+  // binary file cut short (or padded): reading it as text would find no triangle and say less.
+  std::size_t first = 0;
+  while (first < 80 && std::isspace(static_cast<unsigned char>(header[first]))) ++first;
+  if (!binary && std::strncmp(header + first, "solid", 5) != 0)
+    bad(s.path, "a binary STL file (its header does not start with 'solid') that declares " + std::to_string(count) +
+                    " triangles, which take " + std::to_string(84 + 50LL * count) + " bytes, has " + std::to_string(size) +
+                    " bytes (truncated?)");
   in.clear();
   in.seekg(0);
   if (binary) {
@@ -135,10 +144,12 @@ void check_closed_and_orient(TriangleSurface& s) {
       if (T[k] == a && T[(k + 1) % 3] == b) return true;
     return false;
   };
-  std::vector<char> seen(s.triangles.size(), 0);
+  // Walk each connected shell, labelling it and making its triangles agree with their neighbours.
+  std::vector<int> shell(s.triangles.size(), -1);
+  int shells = 0;
   for (std::size_t start = 0; start < s.triangles.size(); ++start) {
-    if (seen[start]) continue;
-    seen[start] = 1;
+    if (shell[start] >= 0) continue;
+    shell[start] = shells;
     std::vector<int> stack{static_cast<int>(start)};
     while (!stack.empty()) {
       const int t = stack.back();
@@ -147,21 +158,58 @@ void check_closed_and_orient(TriangleSurface& s) {
       for (int a = 0; a < 3; ++a) {
         const int u = T[a], v = T[(a + 1) % 3];
         for (int n : edges[{std::min(u, v), std::max(u, v)}]) {
-          if (n == t || seen[n]) continue;
+          if (n == t || shell[n] >= 0) continue;
           if (runs(s.triangles[n], u, v)) std::swap(s.triangles[n][1], s.triangles[n][2]);
-          seen[n] = 1;
+          shell[n] = shells;
           stack.push_back(n);
         }
       }
     }
+    ++shells;
   }
-  double volume = 0.0;
-  for (const auto& T : s.triangles) {
+  // Each shell's signed volume, and a point on it (a triangle's centroid).
+  std::vector<double> volume(shells, 0.0);
+  std::vector<std::array<double, 3>> probe(shells);
+  std::vector<char> probed(shells, 0);
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const auto& T = s.triangles[t];
     const auto &a = s.vertices[T[0]], &b = s.vertices[T[1]], &c = s.vertices[T[2]];
-    volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+    volume[shell[t]] += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+    if (!probed[shell[t]]) {
+      probed[shell[t]] = 1;
+      for (int d = 0; d < 3; ++d) probe[shell[t]][d] = (a[d] + b[d] + c[d]) / 3.0;
+    }
   }
-  if (volume < 0.0)
-    for (auto& T : s.triangles) std::swap(T[1], T[2]);
+  // Outward for a body means positive volume for a shell inside an even number of others (a skin, an
+  // island in a cavity) and negative for one inside an odd number (a cavity): the normals then point
+  // out of the material everywhere. Nesting by the parity of a ray from the shell's point to +x.
+  std::vector<int> depth(shells, 0);
+  if (shells > 1) {
+    double scale = 0.0;
+    for (const auto& p : s.vertices) scale = std::max({scale, std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
+    std::vector<std::vector<int>> crossings(shells, std::vector<int>(shells, 0));
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+      const auto& A = s.vertices[s.triangles[t][0]];
+      const auto& B = s.vertices[s.triangles[t][1]];
+      const auto& C = s.vertices[s.triangles[t][2]];
+      const double d = (B[1] - A[1]) * (C[2] - A[2]) - (C[1] - A[1]) * (B[2] - A[2]);
+      if (d == 0.0) continue;
+      for (int q = 0; q < shells; ++q) {
+        if (q == shell[t]) continue;
+        const double y = probe[q][1] + 1.0e-9 * 0.6180339887 * scale, z = probe[q][2] + 1.0e-9 * 0.4142135623 * scale;
+        const double u = ((y - A[1]) * (C[2] - A[2]) - (C[1] - A[1]) * (z - A[2])) / d;
+        const double v = ((B[1] - A[1]) * (z - A[2]) - (y - A[1]) * (B[2] - A[2])) / d;
+        if (u < 0.0 || v < 0.0 || u + v > 1.0) continue;
+        if (A[0] + u * (B[0] - A[0]) + v * (C[0] - A[0]) > probe[q][0]) ++crossings[q][shell[t]];
+      }
+    }
+    for (int q = 0; q < shells; ++q)
+      for (int o = 0; o < shells; ++o) depth[q] += crossings[q][o] % 2;
+  }
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const bool cavity = depth[shell[t]] % 2 == 1;
+    if ((volume[shell[t]] < 0.0) != cavity) std::swap(s.triangles[t][1], s.triangles[t][2]);
+  }
 }
 
 }  // namespace
@@ -239,23 +287,85 @@ bool InsideTest::inside(const std::array<double, 3>& p) const {
 Lattice voxelize(const TriangleSurface& s, double h) {
   Lattice L;
   L.h = h;
+  // Sizes in double first: a tiny cell size must give a clear message, not an overflowing int.
+  double total_d = 1.0;
+  for (int d = 0; d < 3; ++d) total_d *= std::max(1.0, std::ceil((s.upper[d] - s.lower[d]) / h));
+  if (!(total_d <= 200000000.0)) {
+    std::ostringstream os;
+    os << s.path << ": 'Cell size' " << h << " makes a lattice of " << total_d
+       << " cells around the surface (at most 2e8); choose a larger cell size";
+    throw InputError(os.str());
+  }
   for (int d = 0; d < 3; ++d) {
     const double extent = s.upper[d] - s.lower[d];
     L.cells[d] = std::max(1, static_cast<int>(std::ceil(extent / h)));
     L.origin[d] = 0.5 * (s.lower[d] + s.upper[d]) - 0.5 * L.cells[d] * h;  // centred on the surface
   }
-  const long long total = static_cast<long long>(L.cells[0]) * L.cells[1] * L.cells[2];
-  if (total > 200000000LL)
-    throw InputError(s.path + ": 'Cell size' " + std::to_string(h) + " makes a lattice of " + std::to_string(total) +
-                     " cells around the surface; choose a larger cell size");
-  const InsideTest test(s);
   const int nx = L.cells[0], ny = L.cells[1], nz = L.cells[2];
-  L.cell_element.assign(static_cast<std::size_t>(total), -1);
+  const std::size_t total = static_cast<std::size_t>(nx) * ny * nz;
+  auto cell = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * ny + j) * nx + i; };
+  // 1. The cells whose centres lie inside.
+  std::vector<int> component(total, -1);  // -2: inside, not yet labelled; >= 0: its component
+  {
+    const InsideTest test(s);
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i)
+          if (test.inside({L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}))
+            component[cell(i, j, k)] = -2;
+  }
+  // 2. Their face-connected pieces. Only the largest is kept: cells joined to it by an edge or a corner
+  //    only would hinge on one or two nodes, and a separate piece would float (a singular stiffness).
+  //    Small pieces (thin features a cell wide, stray cells) are removed with a note in the run's
+  //    header; large ones mean the cell size does not resolve the body, which is an error.
+  std::vector<long long> size;
+  for (std::size_t c0 = 0; c0 < total; ++c0) {
+    if (component[c0] != -2) continue;
+    const int label = static_cast<int>(size.size());
+    long long count = 0;
+    std::vector<std::size_t> stack{c0};
+    component[c0] = label;
+    while (!stack.empty()) {
+      const std::size_t c = stack.back();
+      stack.pop_back();
+      ++count;
+      const int i = static_cast<int>(c % nx), j = static_cast<int>((c / nx) % ny), k = static_cast<int>(c / (static_cast<std::size_t>(nx) * ny));
+      const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+      for (const auto& q : nb) {
+        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= nx || q[1] >= ny || q[2] >= nz) continue;
+        const std::size_t n = cell(q[0], q[1], q[2]);
+        if (component[n] != -2) continue;
+        component[n] = label;
+        stack.push_back(n);
+      }
+    }
+    size.push_back(count);
+  }
+  if (size.empty())
+    throw InputError(s.path + ": no lattice cell of size " + std::to_string(h) +
+                         " has its centre inside the surface; choose a smaller 'Cell size'",
+                     InputErrorKind::BadMesh);
+  const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+  long long all = 0;
+  for (long long n : size) all += n;
+  const long long removed = all - size[keep];
+  if (removed > 0.05 * static_cast<double>(all))
+    throw InputError(s.path + ": at 'Cell size' " + std::to_string(h) + " the cells inside the surface form " +
+                         std::to_string(size.size()) + " pieces joined by no face (the largest has " + std::to_string(size[keep]) +
+                         " of " + std::to_string(all) + " cells); Sinew simulates one connected body: choose a smaller 'Cell "
+                         "size' or mesh separate bodies apart",
+                     InputErrorKind::BadMesh);
+  // 3. The kept cells as hex8 elements.
+  L.cell_element.assign(total, -1);
   std::vector<int> node_id(static_cast<std::size_t>(nx + 1) * (ny + 1) * (nz + 1), -1);
   MeshFile& m = L.mesh;
   m.path = s.path;
   m.format = "voxelized surface";
   m.type = ElementType::Hex8;
+  if (removed > 0)
+    m.notes.push_back(std::to_string(removed) + " of " + std::to_string(all) + " cells inside the surface removed: " +
+                      std::to_string(size.size() - 1) + " piece" + (size.size() > 2 ? "s" : "") +
+                      " joined to the body by no face (an edge, a corner or nothing)");
   auto node = [&](int i, int j, int k) {
     int& id = node_id[(static_cast<std::size_t>(k) * (ny + 1) + j) * (nx + 1) + i];
     if (id < 0) {
@@ -268,20 +378,15 @@ Lattice voxelize(const TriangleSurface& s, double h) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        const std::array<double, 3> c{L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h};
-        if (!test.inside(c)) continue;
-        L.cell_element[(static_cast<std::size_t>(k) * ny + j) * nx + i] = static_cast<int>(m.element_tag.size());
+        if (component[cell(i, j, k)] != keep) continue;
+        L.cell_element[cell(i, j, k)] = static_cast<int>(m.element_tag.size());
         // Gmsh / VTK hex8 order: the bottom face counter-clockwise seen from above, then the top.
         const int hex[8] = {node(i, j, k),     node(i + 1, j, k),     node(i + 1, j + 1, k),     node(i, j + 1, k),
                             node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)};
         m.conn.insert(m.conn.end(), hex, hex + 8);
         m.element_tag.push_back(static_cast<long long>(m.element_tag.size()) + 1);
-        m.element_group.push_back(-1);
+        m.element_groups.push_back(0);
       }
-  if (m.element_tag.empty())
-    throw InputError(s.path + ": no lattice cell of size " + std::to_string(h) +
-                         " has its centre inside the surface; choose a smaller 'Cell size'",
-                     InputErrorKind::BadMesh);
   return L;
 }
 
@@ -315,7 +420,8 @@ EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L) {
             }
           }
     if (best < 0)
-      bad(s.path, "surface vertex " + std::to_string(v + 1) + " is more than two cells from the lattice; choose a smaller 'Cell size'");
+      bad(s.path, "surface vertex " + std::to_string(v + 1) + " is more than two cells from the lattice (in a piece too thin for "
+                  "the cells, or one that was removed); choose a smaller 'Cell size'");
     // Trilinear weights in the cell (slightly outside it for a vertex in a neighbouring empty cell).
     const double xi[3] = {(p[0] - (L.origin[0] + bi * L.h)) / L.h, (p[1] - (L.origin[1] + bj * L.h)) / L.h,
                           (p[2] - (L.origin[2] + bk * L.h)) / L.h};

@@ -101,6 +101,7 @@ void Simulation::print_header() const {
   std::printf("  mesh: %lld %s elements, %lld nodes, %lld DOFs (%zu prescribed)\n",
               static_cast<long long>(sys.mesh().global_elements), to_string(sys.mesh().type).c_str(),
               static_cast<long long>(sys.mesh().global_nodes), 3LL * sys.mesh().global_nodes, prescribed);
+  for (const auto& note : sys.mesh().notes) std::printf("  mesh note: %s\n", note.c_str());
   std::printf("  material: %s\n", describe(sys.material()).c_str());
   std::printf("  %d load step%s; converged when |F| < %g; results in %s\n", scene_->steps(), scene_->steps() > 1 ? "s" : "",
               solver_->absolute_tolerance(), out_->directory().c_str());

@@ -96,7 +96,7 @@ std::vector<char> group_nodes(const Mesh& mesh, const Teuchos::Comm<int>& comm, 
   auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
   const int npe = nodes_per_element(mesh.type);
   for (std::size_t e = 0; e < mesh.local_elements(); ++e)
-    if (mesh.element_group[e] == g)
+    if (mesh.in_group(e, g))
       for (int a = 0; a < npe; ++a) in[conn(e, a)] = 1;
   MPI_Comm c = raw_comm(comm);
   int P = 1;

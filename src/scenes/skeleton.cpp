@@ -135,7 +135,9 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
     std::string bone = f[1];
     bone.erase(0, bone.find_first_not_of(" \t"));
     bone.erase(bone.find_last_not_of(" \t") + 1);
-    by_bone[bone][std::atoll(f[0].c_str())] = T;
+    const long long frame = std::atoll(f[0].c_str());
+    if (!by_bone[bone].emplace(frame, T).second)  // a second row would silently replace the first
+      throw InputError(at + "bone '" + bone + "' has frame " + std::to_string(frame) + " twice");
   }
   std::map<std::string, std::vector<Rigid>> out;
   for (auto& [bone, frames] : by_bone) {

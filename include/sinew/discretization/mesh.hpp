@@ -16,6 +16,7 @@
 #include <Teuchos_RCP.hpp>
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -110,6 +111,10 @@ MeshSpec lattice_spec(const MeshParameters& p);
 
 using GlobalId = long long;
 
+// The volume groups an element belongs to, one bit each: a mesh may have at most 64.
+using GroupMask = std::uint64_t;
+constexpr int kMaxVolumeGroups = 64;
+
 // A triangle surface carried along by the mesh (a voxelized character's skin): each vertex moves with
 // the displacement interpolated from eight nodes (global ids) by fixed weights.
 struct EmbeddedSurface {
@@ -146,9 +151,10 @@ struct Mesh {
   std::vector<long long> node_tag, element_tag;
 
   // Element groups (the volume physical groups of a mesh file): their names, and each local element's
-  // group (an index into the names, -1 for none; empty when the mesh has no groups).
+  // groups as a bit mask (an element may be in several: "all" and "tendon"; empty for lattices).
   std::vector<std::string> element_group_names;
-  std::vector<int> element_group;
+  std::vector<GroupMask> element_groups;
+  bool in_group(std::size_t e, int g) const { return !element_groups.empty() && ((element_groups[e] >> g) & 1u); }
   // Node groups (surface, curve and point physical groups): names and, per group, the local nodes
   // (owned and ghost) in it.
   std::vector<std::string> node_group_names;
@@ -159,6 +165,7 @@ struct Mesh {
   GlobalId first_output_node = 0, first_output_element = 0;
   std::vector<GlobalId> node_output_id;
   long long reoriented = 0;  // elements of a mesh file reordered to positive orientation (all ranks)
+  std::vector<std::string> notes;  // what reading the file changed (reordered, merged, removed), all ranks
   // The surface a voxelized mesh was made from (rank 0 holds it; has_embedded is set on every rank).
   std::shared_ptr<const EmbeddedSurface> embedded;
   bool has_embedded = false;

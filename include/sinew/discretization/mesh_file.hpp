@@ -24,11 +24,14 @@ struct MeshFile {
   std::vector<long long> node_tag;       // the file's tag of each node
   std::vector<int> conn;                 // nodes_per_element(type) node indices per element
   std::vector<long long> element_tag;    // the file's tag of each element
-  std::vector<int> element_group;        // index into element_group_names, -1: in no volume group
+  std::vector<GroupMask> element_groups; // per element, bit g: in element_group_names[g]
   std::vector<std::string> element_group_names;
   std::vector<std::string> node_group_names;
   std::vector<std::vector<int>> node_group_nodes;  // per node group: sorted node indices
   long long reoriented = 0;              // negatively oriented elements that were reordered
+  long long merged = 0;                  // copies of an element merged into one (MSH 2.2 writes an
+                                         // element once per volume group it belongs to)
+  std::vector<std::string> notes;        // what the reader changed, one line each, for the run's header
 
   std::size_t nodes() const { return node_tag.size(); }
   std::size_t elements() const { return element_tag.size(); }

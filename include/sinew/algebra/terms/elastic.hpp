@@ -30,6 +30,8 @@ class ElasticTerm final : public EnergyTerm {
   double stiffness_scale() const;
   // The density of each local element's law.
   std::vector<double> element_density() const;
+  // Owned elements per region, in the order the regions were given (not the default law's block).
+  std::vector<long long> owned_region_elements() const;
 
  private:
   struct Block {
