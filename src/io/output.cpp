@@ -15,9 +15,12 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <iomanip>
 #include <regex>
 #include <sstream>
@@ -105,8 +108,55 @@ void write_attribute(hid_t file, const char* name, double value) {
   attr.close();
 }
 
-// Opens a CSV log for writing with its header; on restart it keeps the rows of the steps up to the
-// checkpoint (a row written after it belongs to a step that will be computed again).
+void write_layout_attribute(hid_t file, const char* name, std::uint64_t value) {
+  H5 space(H5Screate(H5S_SCALAR), H5Sclose, "attribute space");
+  H5 attr(H5Acreate2(file, name, H5T_NATIVE_UINT64, space.id(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "attribute");
+  check(H5Awrite(attr.id(), H5T_NATIVE_UINT64, &value), std::string("writing attribute ") + name);
+  attr.close();
+}
+
+// The "layout" attribute of a results file (read by one rank): which row order its rows follow, or
+// nothing for a file that has none (written before layouts were recorded) or cannot be read.
+std::optional<std::uint64_t> read_layout(const std::string& path) {
+  QuietHdf5 quiet;
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return std::nullopt;
+  std::optional<std::uint64_t> out;
+  if (H5Aexists(f, "layout") > 0) {
+    const hid_t a = H5Aopen(f, "layout", H5P_DEFAULT);
+    std::uint64_t v = 0;
+    if (a >= 0 && H5Aread(a, H5T_NATIVE_UINT64, &v) >= 0) out = v;
+    if (a >= 0) H5Aclose(a);
+  }
+  H5Fclose(f);
+  return out;
+}
+
+// A digest of the output row order (collective): the owned nodes' and elements' global ids rank by
+// rank, which is what the rows of mesh.h5 and of every step file follow. It differs between runs on
+// different numbers of ranks (a mesh file's partition depends on them), so a restart can tell whether
+// the mesh file on disk pairs with its new step files.
+std::uint64_t layout_digest(const Mesh& m, MPI_Comm comm) {
+  auto mix = [](std::uint64_t h, std::uint64_t v) {
+    for (int b = 0; b < 8; ++b) h = (h ^ ((v >> (8 * b)) & 0xffu)) * 1099511628211ull;  // FNV-1a
+    return h;
+  };
+  std::uint64_t h = 1469598103934665603ull;
+  h = mix(h, m.n_owned_nodes);
+  for (std::size_t n = 0; n < m.n_owned_nodes; ++n) h = mix(h, static_cast<std::uint64_t>(m.node_gid[n]));
+  h = mix(h, m.n_owned_elements);
+  for (std::size_t e = 0; e < m.n_owned_elements; ++e) h = mix(h, static_cast<std::uint64_t>(m.element_gid[e]));
+  int P = 1, me = 0;
+  MPI_Comm_size(comm, &P);
+  MPI_Comm_rank(comm, &me);
+  std::vector<std::uint64_t> all(P);
+  MPI_Gather(&h, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, 0, comm);
+  std::uint64_t digest = 1469598103934665603ull;
+  for (std::uint64_t v : all) digest = mix(digest, v);
+  MPI_Bcast(&digest, 1, MPI_UINT64_T, 0, comm);
+  return digest;
+}
+
 // Opens a CSV log for appending. A new run writes its header aside and renames it into place; a restart
 // keeps the rows of the steps up to its checkpoint (a row written after it belongs to a step that will
 // be computed again), also written aside and renamed, so that a crash during the restart leaves the old
@@ -194,10 +244,52 @@ Output::Output(const OutputParameters& params, const System& system, const std::
     if (dynamic_cast<const InputError*>(&e)) throw;
     throw InputError(e.what(), InputErrorKind::File);
   }
-  // Step files already on disk from before the restart point belong to the run's history.
-  if (restart_step >= 0 && params_.hdf5)
-    for (int k = 0; k <= restart_step; ++k)
-      if (fs::exists(step_file(k))) written_.emplace_back(k, static_cast<double>(k) / steps_);
+  if (!params_.hdf5) return;
+  MPI_Comm comm = raw_comm(*system.comm());
+  layout_ = layout_digest(system.mesh(), comm);
+  if (restart_step < 0) return;  // a new run writes mesh.h5 (write_mesh)
+  // A restart pairs every step file with the mesh file of its row order: the earlier run's steps with
+  // the mesh file it wrote, the new steps with one of this run's layout. On another number of ranks (or
+  // into a new folder) that is a new file, mesh_layoutK.h5 (or mesh.h5 where there is none), so that
+  // ParaView never draws new rows on old connectivity.
+  std::string mesh_name;
+  collectively(comm, [&] {
+    if (!root_) return;
+    std::vector<std::pair<std::string, std::optional<std::uint64_t>>> meshes;  // on disk, with their layout
+    if (fs::exists(dir_ + "/mesh.h5")) meshes.emplace_back("mesh.h5", read_layout(dir_ + "/mesh.h5"));
+    for (int k = 1; fs::exists(dir_ + "/mesh_layout" + std::to_string(k) + ".h5"); ++k) {
+      const std::string f = "mesh_layout" + std::to_string(k) + ".h5";
+      meshes.emplace_back(f, read_layout(dir_ + "/" + f));
+    }
+    for (const auto& [f, layout] : meshes)
+      if (layout == layout_) mesh_name = f;
+    if (mesh_name.empty()) {
+      mesh_on_disk_ = false;
+      mesh_name = "mesh.h5";
+      for (int k = 1; fs::exists(dir_ + "/" + mesh_name); ++k) mesh_name = "mesh_layout" + std::to_string(k) + ".h5";
+    } else {
+      mesh_on_disk_ = true;
+    }
+    // Step files already on disk up to the restart point belong to the run's history, each with the
+    // mesh file of its layout (one written before layouts were recorded: mesh.h5, which it came with).
+    for (int k = 0; k <= restart_step; ++k) {
+      if (!fs::exists(step_file(k))) continue;
+      const auto layout = read_layout(step_file(k));
+      std::string mesh = layout ? "" : "mesh.h5";
+      for (const auto& [f, l] : meshes)
+        if (layout && l == layout) mesh = f;
+      if (mesh.empty() || !fs::exists(dir_ + "/" + mesh)) continue;  // its mesh file is gone: not indexable
+      written_.push_back({k, static_cast<double>(k) / steps_, mesh});
+    }
+  });
+  // Rank 0 decided; the others need the file name and whether to write it.
+  int on_disk = mesh_on_disk_ ? 1 : 0, len = static_cast<int>(mesh_name.size());
+  MPI_Bcast(&on_disk, 1, MPI_INT, 0, comm);
+  MPI_Bcast(&len, 1, MPI_INT, 0, comm);
+  mesh_name.resize(len);
+  MPI_Bcast(mesh_name.data(), len, MPI_CHAR, 0, comm);
+  mesh_on_disk_ = on_disk != 0;
+  mesh_name_ = mesh_name;
 }
 
 std::string Output::step_file(int step) const {
@@ -207,7 +299,7 @@ std::string Output::step_file(int step) const {
 }
 
 void Output::write_mesh() {
-  if (!params_.hdf5) return;
+  if (!params_.hdf5 || mesh_on_disk_) return;
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes), e_owned = static_cast<long long>(m.n_owned_elements);
   auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
@@ -223,7 +315,8 @@ void Output::write_mesh() {
   // on any number of ranks) and a file's own tags stand beside them.
   const std::vector<long long> node_gid(m.node_gid.begin(), m.node_gid.begin() + n_owned);
   const std::vector<long long> element_gid(m.element_gid.begin(), m.element_gid.begin() + e_owned);
-  write_file(dir_ + "/mesh.h5", raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
+  write_file(dir_ + "/" + mesh_name_, raw_comm(*sys_.comm()), root_, [&](hid_t file, const std::string& tmp) {
+    write_layout_attribute(file, "layout", layout_);
     write_rows(file, "/coordinates", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, xyz.data(), tmp);
     write_rows(file, "/connectivity", H5T_NATIVE_LLONG, m.global_elements, npe, m.first_output_element, e_owned, conn.data(), tmp);
     write_rows(file, "/node_gid", H5T_NATIVE_LLONG, m.global_nodes, 1, m.first_output_node, n_owned, node_gid.data(), tmp);
@@ -234,6 +327,7 @@ void Output::write_mesh() {
                  m.element_tag.data(), tmp);
     }
   });
+  mesh_on_disk_ = true;
 }
 
 std::string Output::surface_file(int step) const {
@@ -281,6 +375,7 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
     }
     write_attribute(file, "load", load);
     write_attribute(file, "step", step);
+    write_layout_attribute(file, "layout", layout_);
   });
   node_fields_.clear();
   for (const auto& f : node_fields) {
@@ -289,7 +384,9 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
     MPI_Allreduce(&vector, &any, 1, MPI_INT, MPI_MAX, comm);
     node_fields_.emplace_back(f.first, any ? 3 : 1);
   }
-  written_.emplace_back(step, load);
+  written_.erase(std::remove_if(written_.begin(), written_.end(), [&](const Written& w) { return w.step == step; }),
+                 written_.end());
+  written_.push_back({step, load, mesh_name_});
   collectively(comm, [&] {
     if (root_) write_xdmf();
   });
@@ -302,13 +399,13 @@ void Output::write_xdmf() const {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
     << "  <Grid Name=\"" << name_ << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (const auto& [step, load] : written_) {
+  for (const auto& [step, load, mesh] : written_) {
     const std::string f = fs::path(step_file(step)).filename().string();
     x << "   <Grid Name=\"step " << step << "\" GridType=\"Uniform\">\n"
       << "    <Time Value=\"" << load << "\"/>\n"
       << "    <Topology TopologyType=\"" << topo << "\" NumberOfElements=\"" << m.global_elements << "\">\n"
       << "     <DataItem Dimensions=\"" << m.global_elements << " " << npe
-      << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">mesh.h5:/connectivity</DataItem>\n"
+      << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">" << mesh << ":/connectivity</DataItem>\n"
       << "    </Topology>\n"
       << "    <Geometry GeometryType=\"XYZ\">\n"
       << "     <DataItem Dimensions=\"" << m.global_nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << f

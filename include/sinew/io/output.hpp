@@ -3,9 +3,12 @@
 // synced), so a crash never leaves a half-written file where a good one was; a failure on any rank is
 // reported on every rank, never left waiting in a barrier.
 //
-//   DIR/mesh.h5            /coordinates (nodes x 3, reference), /connectivity (elements x nodes)
+//   DIR/mesh.h5            /coordinates (nodes x 3, reference), /connectivity (elements x nodes),
+//                          /node_gid, /element_gid; attribute layout (a digest of the row order)
+//   DIR/mesh_layoutK.h5    the same for a restart on another number of ranks (another row order)
 //   DIR/step_NNNNNN.h5     /position (x = X + u), /displacement, /J and /energy_density (per element),
-//                          /contact_pressure (per node, with contact), attributes: load fraction, step
+//                          /contact_pressure (per node, with contact), attributes: load fraction, step,
+//                          layout (which mesh file's rows these follow; the XDMF index pairs them)
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
 //   DIR/skin_NNNNNN.obj    a voxelized mesh's input surface carried along by the lattice
@@ -19,6 +22,7 @@
 #include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
 
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -129,7 +133,15 @@ class Output {
   std::string dir_, name_;
   int steps_ = 1;
   bool root_ = false;
-  std::vector<std::pair<int, double>> written_;  // (step, load) of step files
+  struct Written {
+    int step;
+    double load;
+    std::string mesh;  // the mesh file whose rows the step's rows follow
+  };
+  std::vector<Written> written_;                 // the step files the XDMF index lists
+  std::uint64_t layout_ = 0;                     // digest of the output row order (output.cpp)
+  std::string mesh_name_ = "mesh.h5";            // the mesh file of this run's layout
+  bool mesh_on_disk_ = false;                    // a restart found it already written
   std::vector<std::pair<std::string, int>> node_fields_;  // extra node fields of the step files: name, components
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
