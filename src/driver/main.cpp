@@ -30,6 +30,8 @@ const char* kUsage =
     "  --quiet                no progress lines\n"
     "  --output DIR           write results to DIR (overrides Output/Directory)\n"
     "  --restart FILE         continue the run from a checkpoint (DIR/checkpoint.h5) of the same scene\n"
+    "  --restart-anyway FILE  the same from a checkpoint whose mesh, material, loading, skeleton, contact\n"
+    "                         or time sections differ from the scene's (Solver and Output may always differ)\n"
     "  --kokkos-threads=N     OpenMP threads per rank, 1 to 4096 (or set OMP_NUM_THREADS)\n"
     "  -h, --help             this text\n"
     "\n"
@@ -39,7 +41,7 @@ const char* kUsage =
 
 struct CommandLine {
   std::string scene, restart, output;
-  bool info = false, check = false, quiet = false, help = false, parameters = false;
+  bool info = false, check = false, quiet = false, help = false, parameters = false, anyway = false;
 };
 
 // The rank the MPI launcher gave this process, before MPI is initialized (so only one prints).
@@ -69,9 +71,10 @@ std::string parse(int argc, char** argv, CommandLine& cl) {
       cl.quiet = true;
     } else if (a == "-h" || a == "--help") {
       cl.help = true;
-    } else if (a == "--restart" || a == "--output") {
+    } else if (a == "--restart" || a == "--restart-anyway" || a == "--output") {
       if (i + 1 >= argc || argv[i + 1][0] == '\0') return a + " needs a value";
-      (a == "--restart" ? cl.restart : cl.output) = argv[++i];
+      (a == "--output" ? cl.output : cl.restart) = argv[++i];
+      if (a == "--restart-anyway") cl.anyway = true;
     } else if (a.rfind("--kokkos-threads=", 0) == 0 || a.rfind("--kokkos-num-threads=", 0) == 0) {
       const std::string v = a.substr(a.find('=') + 1);
       if (!positive_int(v, 1, 4096)) return "'" + a + "': the number of threads must be a whole number from 1 to 4096";
@@ -139,6 +142,7 @@ int main(int argc, char** argv) {
     sinew::RunOptions options;
     options.quiet = cl.quiet;
     options.restart_file = cl.restart;
+    options.restart_anyway = cl.anyway;
     sinew::Simulation sim(scene, options);
     return sim.run();
   });

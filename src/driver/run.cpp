@@ -60,15 +60,21 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   if (scene_->dynamic()) dynamics_ = std::make_unique<Dynamics>(*scene_);
   u_ = scene_->system().create_vector();
   u_previous_ = scene_->system().create_vector();
+  // The sections that define the problem solved (not Solver or Output, which a restart may change).
+  const auto& p = config_.params;
+  const Output::Physics physics{{"Mesh", section_digest(p.mesh)},         {"Material", section_digest(p.material)},
+                                {"Loading", section_digest(p.loading)},   {"Skeleton", section_digest(p.skeleton)},
+                                {"Contact", section_digest(p.contact)},   {"Time", section_digest(p.time)}};
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {
     at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get(),
-                                  dynamics_ ? &dynamics_->velocity() : nullptr);
+                                  dynamics_ ? &dynamics_->velocity() : nullptr, opt_.restart_anyway ? nullptr : &physics);
     restart_step = at_.step;
   }
   OutputParameters output = config_.params.output;
   if (scene_->dynamic()) output.every *= scene_->time().substeps;  // Output/Every counts frames
   out_ = std::make_unique<Output>(output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
+  out_->set_physics(physics);
   talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.
   auto comm_copy = comm_;

@@ -2,6 +2,7 @@
 // ranks; the XDMF index; the CSV log; checkpoints that record where the load path stood.
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/core/parameters.hpp>
 #include <sinew/io/output.hpp>
 
 #include "durable_file.hpp"
@@ -112,6 +113,15 @@ void write_layout_attribute(hid_t file, const char* name, std::uint64_t value) {
   H5 space(H5Screate(H5S_SCALAR), H5Sclose, "attribute space");
   H5 attr(H5Acreate2(file, name, H5T_NATIVE_UINT64, space.id(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "attribute");
   check(H5Awrite(attr.id(), H5T_NATIVE_UINT64, &value), std::string("writing attribute ") + name);
+  attr.close();
+}
+
+void write_attribute(hid_t file, const char* name, const std::string& value) {
+  H5 type(H5Tcopy(H5T_C_S1), H5Tclose, "string type");
+  check(H5Tset_size(type.id(), std::max<std::size_t>(1, value.size())), "string size");
+  H5 space(H5Screate(H5S_SCALAR), H5Sclose, "attribute space");
+  H5 attr(H5Acreate2(file, name, type.id(), space.id(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "attribute");
+  check(H5Awrite(attr.id(), type.id(), value.c_str()), std::string("writing attribute ") + name);
   attr.close();
 }
 
@@ -496,11 +506,12 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
       write_rows(file, "/velocity", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, vel.data(), tmp);
     write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
     write_attribute(file, "steps", steps_);
+    for (const auto& [section, digest] : physics_) write_attribute(file, ("physics " + section).c_str(), digest);
   });
 }
 
 LoadState Output::read_checkpoint(const std::string& path, const System& sys, int steps, Vector& u,
-                                  Vector* previous, Vector* velocity) {
+                                  Vector* previous, Vector* velocity, const Physics* physics) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());
   LoadState c;
@@ -549,6 +560,26 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     const int file_steps = static_cast<int>(attribute("steps", 1, 1e9));
     if (file_steps != steps)
       fail("was written for " + std::to_string(file_steps) + " load steps; this scene has " + std::to_string(steps));
+    // The same physics: a checkpoint of another material, load or mesh would continue a different
+    // problem from a state that is not its own (checkpoints written before digests were kept pass).
+    if (physics) {
+      std::vector<std::string> changed;
+      for (const auto& [section, digest] : *physics) {
+        const std::string name = "physics " + section;
+        if (H5Aexists(file.id(), name.c_str()) <= 0) continue;
+        H5 a(H5Aopen(file.id(), name.c_str(), H5P_DEFAULT), H5Aclose, "attribute " + name);
+        H5 type(H5Aget_type(a.id()), H5Tclose, "attribute type");
+        std::string stored(H5Tget_size(type.id()), '\0');
+        if (H5Tget_class(type.id()) != H5T_STRING || H5Aread(a.id(), type.id(), stored.data()) < 0)
+          fail("cannot read attribute '" + name + "' (corrupt file?)");
+        stored.erase(std::find(stored.begin(), stored.end(), '\0'), stored.end());
+        if (stored != digest) changed.push_back("'" + section + "'");
+      }
+      if (!changed.empty())
+        fail("was written by a run whose " + or_list(changed) + " section" + (changed.size() > 1 ? "s differ" : " differs") +
+             " from this scene's; a restart continues the same physics (sinew --restart-anyway FILE continues it with "
+             "this scene's)");
+    }
     const double step = attribute("step", 0, steps);
     c.step = static_cast<int>(step);
     if (c.step != step) fail("attribute 'step' is not a whole number (corrupt file?)");

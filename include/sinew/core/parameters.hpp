@@ -35,6 +35,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <optional>
 #include <ostream>
@@ -386,6 +388,97 @@ void print_section(std::ostream& os, const std::string& title) {
   Printer p(os, title);
   s.visit(p);
   os << "\n";
+}
+
+// Writes a parsed section's values as canonical text, one "path=value;" per entry, defaults included
+// (so neither the order of a file's entries nor whether a default is spelled out changes it; numbers
+// exactly, in hexadecimal floating point). A checkpoint keeps a digest of it per physics section, so
+// that a restart can tell whether it continues the same physics.
+class Fingerprinter {
+ public:
+  explicit Fingerprinter(std::ostream& os, std::string prefix = "") : os_(os), prefix_(std::move(prefix)) {}
+
+  template <class T>
+  void entry(const char* name, T& field, const section_detail::identity_t<T>&, const std::string&, Range = Range::any()) {
+    put(name, field);
+  }
+  template <class T>
+  void optional(const char* name, std::optional<T>& field, const std::string&, Range = Range::any()) {
+    if (field)
+      put(name, *field);
+    else
+      os_ << prefix_ << name << "=(none);";
+  }
+  template <class E>
+  void choice(const char* name, E& field, const section_detail::identity_t<E>&, const Choices<E>& options, const std::string&) {
+    os_ << prefix_ << name << "=" << param_detail::name_of(options, field) << ";";
+  }
+  template <class S>
+  void section(const char* name, S& sub, const std::string&) {
+    Fingerprinter f(os_, prefix_ + name + "/");
+    sub.visit(f);
+  }
+  template <class S>
+  void sections(const char* name, NamedSections<S>& subs, const std::string&) {
+    for (auto& [key, sub] : subs) {
+      Fingerprinter f(os_, prefix_ + name + "/" + key + "/");
+      sub.visit(f);
+    }
+  }
+  template <class S>
+  void inline_section(S& sub) {
+    sub.visit(*this);
+  }
+  template <class S>
+  void other_sublists(NamedSections<S>& subs, const std::string&) {
+    for (auto& [key, sub] : subs) {
+      Fingerprinter f(os_, prefix_ + key + "/");
+      sub.visit(f);
+    }
+  }
+  void raw(const char* name, Teuchos::ParameterList& list, const std::string&) { os_ << prefix_ << name << "=" << list << ";"; }
+
+ private:
+  template <class T>
+  void put(const char* name, const T& v) {
+    os_ << prefix_ << name << "=";
+    value(v);
+    os_ << ";";
+  }
+  template <class T>
+  void value(const T& v) {
+    if constexpr (std::is_same_v<T, std::string>) {
+      os_ << '"' << v << '"';
+    } else if constexpr (std::is_same_v<T, bool>) {
+      os_ << (v ? "true" : "false");
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      os_ << std::hexfloat << static_cast<double>(v) << std::defaultfloat;
+    } else {  // std::array and std::vector of numbers
+      os_ << "{";
+      for (const auto& x : v) {
+        value(x);
+        os_ << ",";
+      }
+      os_ << "}";
+    }
+  }
+
+  std::ostream& os_;
+  std::string prefix_;
+};
+
+// A 16-hex-digit digest (FNV-1a, 64 bits) of a section's canonical text.
+template <class S>
+std::string section_digest(const S& section) {
+  S copy = section;  // visit() is not const
+  std::ostringstream os;
+  Fingerprinter f(os);
+  copy.visit(f);
+  std::uint64_t h = 1469598103934665603ull;
+  for (const unsigned char c : os.str()) h = (h ^ c) * 1099511628211ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
 }
 
 }  // namespace sinew

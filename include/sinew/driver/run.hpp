@@ -14,6 +14,7 @@ namespace sinew {
 struct RunOptions {
   bool quiet = false;        // no progress lines (errors still go to stderr)
   std::string restart_file;  // continue from this checkpoint (empty: start from the beginning)
+  bool restart_anyway = false;  // accept a checkpoint whose physics sections differ from the scene's
 };
 
 class Scene;

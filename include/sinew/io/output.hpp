@@ -119,10 +119,17 @@ class Output {
                         const Vector* velocity = nullptr);
 
   // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
-  // Throws InputError (kind File) when the file is missing, unreadable, corrupt or from another scene.
+  // Throws InputError (kind File) when the file is missing, unreadable, corrupt, from another mesh or
+  // number of steps, or (with physics given) from a scene with other physics.
   // With velocity given, the checkpoint must hold one (a dynamic run's).
+  // With physics given, a checkpoint whose stored digest of a section differs is refused, naming the
+  // sections.
+  using Physics = std::vector<std::pair<std::string, std::string>>;  // section name, digest
   static LoadState read_checkpoint(const std::string& path, const System& system, int steps, Vector& u,
-                                   Vector* previous = nullptr, Vector* velocity = nullptr);
+                                   Vector* previous = nullptr, Vector* velocity = nullptr,
+                                   const Physics* physics = nullptr);
+  // The digests of the scene's physics sections, stored in every checkpoint written after this.
+  void set_physics(Physics physics) { physics_ = std::move(physics); }
 
  private:
   void write_xdmf() const;
@@ -142,6 +149,7 @@ class Output {
   std::uint64_t layout_ = 0;                     // digest of the output row order (output.cpp)
   std::string mesh_name_ = "mesh.h5";            // the mesh file of this run's layout
   bool mesh_on_disk_ = false;                    // a restart found it already written
+  Physics physics_;
   std::vector<std::pair<std::string, int>> node_fields_;  // extra node fields of the step files: name, components
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
