@@ -83,8 +83,9 @@ TEST(Scenes, TwistConvergesAndSubstepsReachTheSameState) {
       ++count;
     }
   turn /= count;
-  EXPECT_GT(turn, 0.35 * M_PI);
-  EXPECT_LT(turn, 0.65 * M_PI);
+  // By the symmetry of the problem (the cube's top turned by pi, its bottom held) the mid-height layer
+  // turns by exactly half, up to the solver's tolerance.
+  EXPECT_NEAR(turn, 0.5 * M_PI, 1e-3 * M_PI);
 }
 
 TEST(Scenes, ScrambleReturnsToRest) {
@@ -111,11 +112,13 @@ TEST(Scenes, StretchSnhPreservesVolumeWhereCorotationalLosesIt) {
   const RunResult a = run(snh), b = run(cr);
   ASSERT_EQ(a.code, 0);
   const double snh_change = a.records.back().volume_ratio - 1.0;
-  EXPECT_LT(std::fabs(snh_change), 0.05) << "SNH volume change " << snh_change;
+  // +1.4% at the shipped resolution (README, Fig. 5), +1.8% on this coarser cylinder.
+  EXPECT_GT(snh_change, 0.0) << "SNH volume change " << snh_change;
+  EXPECT_LT(snh_change, 0.025) << "SNH volume change " << snh_change;
   // Corotational converges here and loses a large part of the volume (Sec. 5.2).
   ASSERT_EQ(b.code, 0);
   const double cr_change = b.records.back().volume_ratio - 1.0;
-  EXPECT_LT(cr_change, -0.3) << "corotational volume change " << cr_change;
+  EXPECT_LT(cr_change, -0.55) << "corotational volume change " << cr_change;  // -63% here, -66% shipped
   if (world()->getRank() == 0)
     std::printf("[ info ] stretch x3.4, 6x6x12 voxel cylinder: SNH volume %+.2f%%, corotational %+.2f%%\n", 100 * snh_change,
                 100 * cr_change);
