@@ -138,9 +138,14 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     else
       first_guess(t, *trial);
     if (talk_) {
-      const double done = at_.load - start_load_, elapsed = wall_seconds() - started_;
+      const double now = wall_seconds(), done = at_.load - start_load_, elapsed = now - started_;
+      // The pace of the last two steps, not of the whole run: steps grow as a motion creases the
+      // flesh (a character's steps went from 12 s to over 100 s while an average promised a minute).
+      if (pace_.empty() || pace_.back().first < at_.load) pace_.emplace_back(at_.load, now);
+      const auto& from = pace_[pace_.size() >= 3 ? pace_.size() - 3 : 0];
       std::string eta;
-      if (done > 1e-12 && elapsed > 1.0) eta = ", ~" + duration(elapsed / done * (1.0 - at_.load)) + " left";
+      if (done > 1e-12 && elapsed > 1.0 && at_.load - from.first > 1e-12)
+        eta = ", ~" + duration((now - from.second) / (at_.load - from.first) * (1.0 - at_.load)) + " left";
       if (dynamics_)
         std::printf("step %d/%d  t = %.6g s%s  (%s elapsed%s)\n", k, n, dynamics_->time_of(t),
                     rec.cuts ? "  (after cutting the time step)" : "", duration(elapsed).c_str(), eta.c_str());

@@ -83,6 +83,7 @@ class Simulation {
   bool talk_ = false;
   double started_ = 0.0;     // wall clock at the start of run(), seconds
   double start_load_ = 0.0;  // load of the state run() started from (for the time estimate)
+  std::vector<std::pair<double, double>> pace_;  // (load, wall clock) where steps started: the estimate's pace
 };
 
 // Runs a scene on all ranks of the default communicator; returns the process exit code. Never
