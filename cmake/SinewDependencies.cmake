@@ -2,6 +2,7 @@
 #   sinew::kokkos    Kokkos only (for header-only material code and light tests)
 #   sinew::trilinos  every Trilinos package Sinew uses
 #   sinew::hdf5      parallel HDF5 (C API)
+#   assimp::assimp   Assimp 5.2 (Debian's libassimp-dev, BSD-3): rigged characters
 # Stops at configure time when Kokkos lacks the OpenMP backend, unless SINEW_ALLOW_SERIAL_ONLY.
 
 find_package(MPI REQUIRED COMPONENTS C CXX)
@@ -66,3 +67,6 @@ execute_process(COMMAND id -u OUTPUT_VARIABLE _uid OUTPUT_STRIP_TRAILING_WHITESP
 if(_uid STREQUAL "0")
   list(APPEND SINEW_MPIEXEC_FLAGS --allow-run-as-root)
 endif()
+
+# Rigged characters (glTF, FBX, COLLADA, .x, BVH): Debian's libassimp-dev (scripts/deps.sh).
+find_package(assimp 5.2 REQUIRED)

@@ -49,7 +49,7 @@ packages=(build-essential cmake ninja-build ccache pkg-config xz-utils
   libopenmpi-dev openmpi-bin libhdf5-openmpi-dev hdf5-tools
   libblas-dev liblapack-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-h5py python3-matplotlib python3-pil
-  gmsh python3-meshio python3-paraview xvfb xauth)
+  gmsh python3-meshio python3-paraview xvfb xauth libassimp-dev assimp-testmodels)
 
 apt_install() {
   local missing=()
