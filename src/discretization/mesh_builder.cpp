@@ -2,20 +2,26 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/partition.hpp>
+#include <sinew/discretization/rig_file.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 
 namespace sinew {
 
 Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
-  if (p.type != "file" && p.type != "voxelize") return build_mesh(lattice_spec(p), comm);
+  if (p.type != "file" && p.type != "voxelize" && p.type != "rig") return build_mesh(lattice_spec(p), comm);
   MeshFile file;
   std::shared_ptr<EmbeddedSurface> skin;
-  if (p.type == "voxelize") {  // rank 0 fills the surface with cells, then it is distributed like a file
+  if (p.type == "voxelize" || p.type == "rig") {  // rank 0 fills the surface with cells, then it is distributed like a file
     collectively(raw_comm(comm), [&] {
       if (comm.getRank() != 0) return;
-      const TriangleSurface surface = read_triangle_surface(p.surface);
-      Lattice lattice = voxelize(surface, p.cell_size);
-      skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice));
+      const TriangleSurface surface = p.type == "rig" ? rig_surface(read_rig_file(p.rig), p.rig_meshes) : read_triangle_surface(p.surface);
+      Lattice lattice = voxelize(surface, p.cell_size, p.type == "rig" ? InsideRule::Winding : InsideRule::Parity);
+      long long far = 0;
+      skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice, p.type == "rig" ? &far : nullptr));
+      if (far > 0)
+        lattice.mesh.notes.push_back(std::to_string(far) + " of " + std::to_string(surface.vertices.size()) +
+                                     " skin vertices lie more than two cells from the lattice (parts thinner than a cell); "
+                                     "they follow their nearest cell's motion, extrapolated");
       file = std::move(lattice.mesh);
     });
     Mesh mesh = distribute_mesh(std::move(file), comm);

@@ -283,6 +283,50 @@ RigFile read_rig_file(const std::string& path) {
   return rig;
 }
 
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes) {
+  std::vector<int> chosen;
+  std::stringstream list(meshes);
+  for (std::string name; std::getline(list, name, ',');) {
+    name.erase(0, name.find_first_not_of(" \t"));
+    name.erase(name.find_last_not_of(" \t") + 1);
+    if (name.empty()) continue;
+    int found = -1;
+    for (std::size_t m = 0; m < rig.meshes.size(); ++m)
+      if (rig.meshes[m].name == name) found = static_cast<int>(m);
+    if (found < 0) {
+      std::string names;
+      for (const auto& m : rig.meshes) names += (names.empty() ? "'" : ", '") + m.name + "'";
+      bad(rig.path, "no mesh '" + name + "' (the file has " + names + ")");
+    }
+    chosen.push_back(found);
+  }
+  if (chosen.empty())
+    for (std::size_t m = 0; m < rig.meshes.size(); ++m) chosen.push_back(static_cast<int>(m));
+  TriangleSurface s;
+  s.path = rig.path;
+  for (int m : chosen) {
+    const int base = static_cast<int>(s.vertices.size());
+    const auto x = rig.skin(m, nullptr, 0.0);
+    s.vertices.insert(s.vertices.end(), x.begin(), x.end());
+    for (const auto& t : rig.meshes[m].triangles) s.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+  }
+  if (s.triangles.empty()) bad(rig.path, "the chosen meshes have no triangles");
+  double volume = 0.0;
+  for (const auto& T : s.triangles) {
+    const auto &a = s.vertices[T[0]], &b = s.vertices[T[1]], &c = s.vertices[T[2]];
+    volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  if (volume < 0.0)
+    for (auto& T : s.triangles) std::swap(T[1], T[2]);
+  s.lower = s.upper = s.vertices.front();
+  for (const auto& p : s.vertices)
+    for (int d = 0; d < 3; ++d) {
+      s.lower[d] = std::min(s.lower[d], p[d]);
+      s.upper[d] = std::max(s.upper[d], p[d]);
+    }
+  return s;
+}
+
 std::string describe(const RigFile& rig) {
   std::ostringstream os;
   long long joints = 0;

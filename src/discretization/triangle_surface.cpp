@@ -284,7 +284,27 @@ bool InsideTest::inside(const std::array<double, 3>& p) const {
   return crossings % 2 == 1;
 }
 
-Lattice voxelize(const TriangleSurface& s, double h) {
+double winding_number(const TriangleSurface& s, const std::array<double, 3>& p) {
+  // Van Oosterom and Strackee: tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|).
+  double total = 0.0;
+  for (const auto& T : s.triangles) {
+    double a[3], b[3], c[3];
+    for (int d = 0; d < 3; ++d) {
+      a[d] = s.vertices[T[0]][d] - p[d];
+      b[d] = s.vertices[T[1]][d] - p[d];
+      c[d] = s.vertices[T[2]][d] - p[d];
+    }
+    const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]), lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]),
+                 lc = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+    const double den = la * lb * lc + (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * lc + (b[0] * c[0] + b[1] * c[1] + b[2] * c[2]) * la +
+                       (c[0] * a[0] + c[1] * a[1] + c[2] * a[2]) * lb;
+    total += 2.0 * std::atan2(det, den);
+  }
+  return total / (4.0 * M_PI);
+}
+
+Lattice voxelize(const TriangleSurface& s, double h, InsideRule rule) {
   Lattice L;
   L.h = h;
   // Sizes in double first: a tiny cell size must give a clear message, not an overflowing int.
@@ -306,13 +326,21 @@ Lattice voxelize(const TriangleSurface& s, double h) {
   auto cell = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * ny + j) * nx + i; };
   // 1. The cells whose centres lie inside.
   std::vector<int> component(total, -1);  // -2: inside, not yet labelled; >= 0: its component
-  {
+  if (rule == InsideRule::Parity) {
     const InsideTest test(s);
     for (int k = 0; k < nz; ++k)
       for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i)
           if (test.inside({L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}))
             component[cell(i, j, k)] = -2;
+  } else {
+    // Every cell against every triangle (threads over cells): cells x triangles solid angles.
+#pragma omp parallel for schedule(dynamic, 64)
+    for (long long c = 0; c < static_cast<long long>(total); ++c) {
+      const int i = static_cast<int>(c % nx), j = static_cast<int>((c / nx) % ny), k = static_cast<int>(c / (static_cast<long long>(nx) * ny));
+      if (winding_number(s, {L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}) > 0.5)
+        component[c] = -2;
+    }
   }
   // 2. Their face-connected pieces. Only the largest is kept: cells joined to it by an edge or a corner
   //    only would hinge on one or two nodes, and a separate piece would float (a singular stiffness).
@@ -390,7 +418,7 @@ Lattice voxelize(const TriangleSurface& s, double h) {
   return L;
 }
 
-EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L) {
+EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L, long long* far_vertices) {
   EmbeddedSurface out;
   out.rest = s.vertices;
   out.triangles = s.triangles;
@@ -402,7 +430,8 @@ EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L) {
     // The containing cell, or the kept cell nearest to the vertex within two cells around it.
     int best = -1, bi = 0, bj = 0, bk = 0;
     double best_d = HUGE_VAL;
-    for (int r = 0; r <= 2 && best < 0; ++r)
+    const int rings = far_vertices ? std::max({nx, ny, nz}) : 2;
+    for (int r = 0; r <= rings && best < 0; ++r)
       for (int k = std::max(0, c[2] - r); k <= std::min(nz - 1, c[2] + r); ++k)
         for (int j = std::max(0, c[1] - r); j <= std::min(ny - 1, c[1] + r); ++j)
           for (int i = std::max(0, c[0] - r); i <= std::min(nx - 1, c[0] + r); ++i) {
@@ -419,6 +448,7 @@ EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L) {
               bk = k;
             }
           }
+    if (far_vertices && best >= 0 && std::sqrt(best_d) > 2.5 * L.h) ++*far_vertices;
     if (best < 0)
       bad(s.path, "surface vertex " + std::to_string(v + 1) + " is more than two cells from the lattice (in a piece too thin for "
                   "the cells, or one that was removed); choose a smaller 'Cell size'");

@@ -4,6 +4,7 @@
 #include <sinew/driver/config.hpp>
 
 #include <sinew/discretization/mesh_file.hpp>
+#include <sinew/discretization/rig_file.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 
 #include <algorithm>
@@ -35,6 +36,8 @@ SceneConfig read_scene(const std::string& path) {
   resolve(c.params.mesh.file);
   resolve(c.params.mesh.surface);
   resolve(c.params.skeleton.motion_file);
+  resolve(c.params.mesh.rig);
+  resolve(c.params.skeleton.rig);
   for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
   for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
   for (auto& [name, collider] : c.params.contact.colliders) resolve(collider.surface);
@@ -46,6 +49,19 @@ void check_mesh_file(const SceneConfig& c) {
   try {
     // Closed surfaces (a voxelized body, 'inside' regions) are small: read and check them whole.
     if (p.mesh.type == "voxelize") read_triangle_surface(p.mesh.surface);
+    // A rig: the file, the meshes named as the flesh, the clip named for the bones.
+    if (p.mesh.type == "rig") {
+      try {
+        rig_surface(read_rig_file(p.mesh.rig), p.mesh.rig_meshes);
+      } catch (const InputError& e) {
+        throw e.prefixed("Mesh: ");
+      }
+    }
+    if (!p.skeleton.rig.empty()) {
+      const RigFile rig = read_rig_file(p.skeleton.rig);
+      if (std::none_of(rig.clips.begin(), rig.clips.end(), [&](const RigClip& k) { return p.skeleton.clip.empty() || k.name == p.skeleton.clip; }))
+        throw InputError("Skeleton: " + p.skeleton.rig + " has no clip" + (p.skeleton.clip.empty() ? "" : " '" + p.skeleton.clip + "'"));
+    }
     auto surface = [](const RegionParameters& r, const std::string& where) {
       if (r.region != "inside") return;
       try {
@@ -66,7 +82,7 @@ void check_mesh_file(const SceneConfig& c) {
     }
     // A collider attached to a bone needs that bone.
     for (const auto& [name, collider] : p.contact.colliders)
-      if (!collider.bone.empty() && std::none_of(p.skeleton.bones.begin(), p.skeleton.bones.end(),
+      if (!collider.bone.empty() && p.skeleton.rig.empty() && std::none_of(p.skeleton.bones.begin(), p.skeleton.bones.end(),
                                                  [&](const auto& b) { return b.first == collider.bone; }))
         throw InputError("Contact/Colliders/" + name + ": 'Bone' \"" + collider.bone + "\" is not a bone of the Skeleton");
   } catch (const InputError& e) {
@@ -108,6 +124,8 @@ std::string describe(const SceneConfig& c) {
     os << "mesh: file " << p.mesh.file << "\n";
   else if (p.mesh.type == "voxelize")
     os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling " << p.mesh.surface << "\n";
+  else if (p.mesh.type == "rig")
+    os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling the skin of " << p.mesh.rig << "\n";
   else
     os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
        << " x " << p.mesh.cells[2] << " cells\n";

@@ -8,6 +8,7 @@
 #include <sinew/driver/signals.hpp>
 #include <sinew/io/output.hpp>
 #include <sinew/scenes/scene.hpp>
+#include <sinew/scenes/skeleton.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
@@ -116,6 +117,11 @@ void Simulation::print_header() const {
               static_cast<long long>(sys.mesh().global_nodes), 3LL * sys.mesh().global_nodes, prescribed);
   for (const auto& note : sys.mesh().notes) std::printf("  mesh note: %s\n", note.c_str());
   std::printf("  material: %s\n", describe(sys.material()).c_str());
+  if (!config_.params.skeleton.rig.empty()) {
+    const Skeleton& sk = scene_->skeleton();
+    std::printf("  skeleton: %zu bones from the joints of %s (%d joint%s hold no node); motion made rigid to %.1e\n", sk.size(),
+                config_.params.skeleton.rig.c_str(), sk.unused_joints(), sk.unused_joints() == 1 ? "" : "s", sk.nonrigid());
+  }
   std::printf("  %d load step%s; converged when |F| < %g; results in %s\n", scene_->steps(), scene_->steps() > 1 ? "s" : "",
               solver_->absolute_tolerance(), out_->directory().c_str());
   if (at_.step > 0 || at_.load > 0.0)

@@ -3,6 +3,7 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/core/sym_eigen.hpp>
 #include <sinew/core/xml_input.hpp>
+#include <sinew/discretization/rig_file.hpp>
 #include <sinew/scenes/skeleton.hpp>
 
 #include <algorithm>
@@ -151,10 +152,140 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
   return out;
 }
 
+// The inverse of an affine map.
+Affine inverse(const Affine& a) {
+  const Mat3& A = a.A;
+  const double d = det(A);
+  Mat3 B;
+  B(0, 0) = (A(1, 1) * A(2, 2) - A(1, 2) * A(2, 1)) / d;
+  B(0, 1) = (A(0, 2) * A(2, 1) - A(0, 1) * A(2, 2)) / d;
+  B(0, 2) = (A(0, 1) * A(1, 2) - A(0, 2) * A(1, 1)) / d;
+  B(1, 0) = (A(1, 2) * A(2, 0) - A(1, 0) * A(2, 2)) / d;
+  B(1, 1) = (A(0, 0) * A(2, 2) - A(0, 2) * A(2, 0)) / d;
+  B(1, 2) = (A(0, 2) * A(1, 0) - A(0, 0) * A(1, 2)) / d;
+  B(2, 0) = (A(1, 0) * A(2, 1) - A(1, 1) * A(2, 0)) / d;
+  B(2, 1) = (A(0, 1) * A(2, 0) - A(0, 0) * A(2, 1)) / d;
+  B(2, 2) = (A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0)) / d;
+  Affine out;
+  out.A = B;
+  for (int i = 0; i < 3; ++i) out.t[i] = -(B(i, 0) * a.t[0] + B(i, 1) * a.t[1] + B(i, 2) * a.t[2]);
+  return out;
+}
+
+// The rotation nearest to A (the polar factor, by Higham's iteration R <- (R + R^-T) / 2).
+Mat3 nearest_rotation(const Mat3& A) {
+  Mat3 R = A;
+  for (int it = 0; it < 30; ++it) {
+    const Mat3 Rt = transpose(inverse(Affine{R, {0, 0, 0}}).A);
+    Mat3 next;
+    double change = 0.0;
+    for (int k = 0; k < 9; ++k) {
+      next[k] = 0.5 * (R[k] + Rt[k]);
+      change = std::max(change, std::fabs(next[k] - R[k]));
+    }
+    R = next;
+    if (change < 1e-15) break;
+  }
+  return R;
+}
+
 }  // namespace
+
+void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm,
+                              const std::string& where) {
+  RigFile rig;
+  collectively(raw_comm(comm), [&] { rig = read_rig_file(p.rig); });
+  const RigClip* clip = nullptr;
+  for (const auto& c : rig.clips)
+    if (p.clip.empty() || c.name == p.clip) {
+      clip = &c;
+      break;
+    }
+  if (!clip) {
+    std::string names;
+    for (const auto& c : rig.clips) names += (names.empty() ? "'" : ", '") + c.name + "'";
+    throw InputError(where + ": " + p.rig + (p.clip.empty() ? " has no animation clip" : " has no clip '" + p.clip + "'") +
+                     (names.empty() ? "" : " (it has " + names + ")"));
+  }
+  const double t0 = p.clip_start, t1 = p.clip_end >= 0.0 ? p.clip_end : clip->duration;
+  if (!(t1 > t0)) throw InputError(where + ": 'Clip start' " + std::to_string(t0) + " is not before the clip's end " + std::to_string(t1));
+  // Each joint's capsule at rest: from its origin to its first child joint's (a point for a leaf).
+  const std::vector<Affine> rest = rig.pose(nullptr, 0.0);
+  std::vector<int> joints;
+  std::vector<std::array<double, 3>> a, b;
+  for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
+    if (!rig.nodes[n].joint) continue;
+    joints.push_back(static_cast<int>(n));
+    a.push_back(rest[n].t);
+    b.push_back(rest[n].t);
+    for (std::size_t c = n + 1; c < rig.nodes.size(); ++c)
+      if (rig.nodes[c].parent == static_cast<int>(n) && rig.nodes[c].joint) {
+        b.back() = rest[c].t;
+        break;
+      }
+  }
+  if (joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
+  // The capsule radius: 1.5 cells unless given (the lattice is uniform: any element's edge).
+  double h = 0.0;
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto Ch = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  if (mesh.local_elements() > 0)
+    for (int d = 0; d < 3; ++d) h = std::max(h, std::fabs(Xh(Ch(0, 1), d) - Xh(Ch(0, 0), d)));
+  MPI_Allreduce(MPI_IN_PLACE, &h, 1, MPI_DOUBLE, MPI_MAX, raw_comm(comm));
+  const double radius = p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h;
+  // Nodes to the nearest capsule that holds them (production rigs' capsules overlap).
+  std::vector<std::vector<int>> nodes(joints.size());
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
+    const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
+    int best = -1;
+    double best_d = radius;
+    for (std::size_t j = 0; j < joints.size(); ++j) {
+      const double d = segment_distance(X, a[j], b[j]);
+      if (d <= best_d) {
+        best_d = d;
+        best = static_cast<int>(j);
+      }
+    }
+    if (best >= 0) nodes[best].push_back(static_cast<int>(n));
+  }
+  // The clip sampled into frames over the load; each joint's motion from rest made rigid about its
+  // origin (a production rig may scale or shear: the departure is kept for the run's header).
+  const int F = std::max(1, static_cast<int>(std::ceil((t1 - t0) * p.sample_rate)));
+  std::vector<std::vector<Rigid>> frames(joints.size());
+  for (int k = 0; k <= F; ++k) {
+    const std::vector<Affine> W = rig.pose(clip, t0 + (t1 - t0) * k / F);
+    for (std::size_t j = 0; j < joints.size(); ++j) {
+      const Affine D = W[joints[j]].after(inverse(rest[joints[j]]));
+      Rigid T;
+      T.R = nearest_rotation(D.A);
+      for (int q = 0; q < 9; ++q) nonrigid_ = std::max(nonrigid_, std::fabs(T.R[q] - D.A[q]));
+      const auto c = D.apply(a[j]);
+      for (int i = 0; i < 3; ++i) T.t[i] = c[i] - (T.R(i, 0) * a[j][0] + T.R(i, 1) * a[j][1] + T.R(i, 2) * a[j][2]);
+      frames[j].push_back(T);
+    }
+  }
+  // Joints whose capsule holds no node anywhere (a finger thinner than the cells) are no bones.
+  std::vector<long long> count(joints.size());
+  for (std::size_t j = 0; j < joints.size(); ++j)
+    for (int n : nodes[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
+  MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(count.size()), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    if (count[j] == 0) {
+      ++unused_joints_;
+      continue;
+    }
+    Bone bone;
+    bone.name = rig.nodes[joints[j]].name;
+    bone.frames = std::move(frames[j]);
+    bone.nodes = std::move(nodes[j]);
+    bones_.push_back(std::move(bone));
+  }
+  if (bones_.empty()) throw InputError(where + ": no joint of " + p.rig + " holds a lattice node within 'Bone radius' " + std::to_string(radius));
+}
 
 Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where)
     : skinning_(p.skinning), falloff_(p.falloff) {
+  if (!p.rig.empty()) bones_from_rig(p, mesh, comm, where);
   std::map<std::string, std::vector<Rigid>> frames;
   if (!p.motion_file.empty()) collectively(raw_comm(comm), [&] { frames = read_motion_file(p.motion_file); });
   std::size_t nframes = 0;
@@ -174,7 +305,7 @@ Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos:
     b.nodes = select_region(mesh, comm, bp.region, where + "/Bones/" + name);
     bones_.push_back(std::move(b));
   }
-  for (std::size_t k = 0; k < bones_.size(); ++k)
+  for (std::size_t k = 0; k < p.bones.size(); ++k)
     for (std::size_t j = 0; j < bones_.size(); ++j)
       if (p.bones[k].second.parent == bones_[j].name) bones_[k].parent = static_cast<int>(j);
   for (const auto& [bone, f] : frames)

@@ -37,7 +37,7 @@ inline const Choices<ElementType>& element_choices() {
 
 // The "Mesh" section of a scene.
 struct MeshParameters {
-  std::string type, file, surface;
+  std::string type, file, surface, rig, rig_meshes;
   double cell_size = 0.0;
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{};
@@ -48,16 +48,21 @@ struct MeshParameters {
   template <class V>
   void visit(V& v) {
     v.choice("Type", type, std::string("box"),
-             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}, {"voxelize", "voxelize"}},
-             "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), file, or voxelize "
-             "(a hex8 lattice filling a closed surface)");
+             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}, {"voxelize", "voxelize"}, {"rig", "rig"}},
+             "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), file, voxelize "
+             "(a hex8 lattice filling a closed surface), or rig (a hex8 lattice filling a rigged character's skin)");
     v.entry("File", file, std::string(""),
             "file: a Gmsh mesh (.msh, format 4.1 or 2.2, ASCII or binary) of tet4 or hex8 elements; a relative "
             "path is taken from the scene file's folder");
     v.entry("Surface", surface, std::string(""),
             "voxelize: a closed triangle surface (.obj or .stl) to fill with hex8 cells; it is carried along and "
             "written per output step as DIR/skin_NNNNNN.obj; a relative path is taken from the scene file's folder");
-    v.entry("Cell size", cell_size, 0.0, "voxelize: the edge length of the lattice cells", Range::non_negative());
+    v.entry("Rig", rig, std::string(""),
+            "rig: a rigged character (glTF, FBX, COLLADA, DirectX .x; read with Assimp, see sinew-rig) whose skin, in "
+            "its rest pose, is filled with hex8 cells (inside: the generalized winding number, so skins made of "
+            "several open pieces work); a relative path is taken from the scene file's folder");
+    v.entry("Rig meshes", rig_meshes, std::string(""), "rig: the meshes that form the flesh, comma-separated (empty: all)");
+    v.entry("Cell size", cell_size, 0.0, "voxelize, rig: the edge length of the lattice cells", Range::non_negative());
     v.choice("Element", element, ElementType::Hex8, element_choices(),
              "hex8 (2x2x2 Gauss points) or tet4 (each lattice cell split into 6 tets, 1 point)");
     v.entry("Elements", cells, {4, 4, 4}, "cells along x, y, z (cylinder: across the diameter in x and y, along z)",
@@ -75,11 +80,20 @@ struct MeshParameters {
     if (type == "file") {
       if (file.empty()) c.fail("missing entry 'File' (the mesh file of Type file)", InputErrorKind::MissingEntry);
       for (const char* lattice_only : {"Element", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter",
-                                       "Jitter seed", "Surface", "Cell size"})
+                                       "Jitter seed", "Surface", "Cell size", "Rig", "Rig meshes"})
         if (c.given(lattice_only))
           c.fail("'" + std::string(lattice_only) + "' applies to generated meshes, not to Type file (the file says it)");
       return;
     }
+    if (type == "rig") {
+      if (rig.empty()) c.fail("missing entry 'Rig' (the rigged character whose skin to fill)", InputErrorKind::MissingEntry);
+      if (!(cell_size > 0.0)) c.fail("missing entry 'Cell size' (> 0) of the voxel lattice", InputErrorKind::MissingEntry);
+      for (const char* other : {"File", "Surface", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
+        if (c.given(other)) c.fail("'" + std::string(other) + "' does not apply to Type rig (Rig and Cell size say it)");
+      if (c.given("Element") && element != ElementType::Hex8) c.fail("Type rig makes hex8 cells ('Element' tet4 is not offered)");
+      return;
+    }
+    if (c.given("Rig") || c.given("Rig meshes")) c.fail("'Rig' and 'Rig meshes' apply to Type rig only");
     if (type == "voxelize") {
       if (surface.empty()) c.fail("missing entry 'Surface' (the closed surface to voxelize)", InputErrorKind::MissingEntry);
       if (!(cell_size > 0.0)) c.fail("missing entry 'Cell size' (> 0) of the voxel lattice", InputErrorKind::MissingEntry);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <sinew/core/small_matrix.hpp>
+#include <sinew/discretization/triangle_surface.hpp>
 
 #include <array>
 #include <string>
@@ -99,6 +100,11 @@ struct RigFile {
 // that is no node, a vertex of a skinned mesh that no bone holds), naming the file and the culprit.
 // Weights are normalized per vertex (exporters round them).
 RigFile read_rig_file(const std::string& path);
+
+// The skin at the rest pose as one triangle soup: the named meshes (comma-separated; empty: all), each
+// skinned at the rest pose; turned outward as a whole when its signed volume is negative. Throws
+// InputError naming a mesh the file does not have (and those it has).
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes);
 
 // A listing of the file for a user choosing meshes, joints and clips (sinew-rig).
 std::string describe(const RigFile& rig);

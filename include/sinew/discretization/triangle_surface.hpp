@@ -52,10 +52,20 @@ struct Lattice {
   double h = 0.0;
   std::vector<int> cell_element;  // per lattice cell: its element, or -1 outside
 };
-Lattice voxelize(const TriangleSurface& s, double h);
+// Inside by the parity of a ray's crossings (a closed surface), or by the generalized winding number
+// w(p) = sum of the triangles' solid angles / 4 pi > 1/2 (Jacobson et al. 2013): robust to a skin
+// made of open pieces that abut or overlap, as characters' skins are (outward triangles assumed).
+enum class InsideRule { Parity, Winding };
+Lattice voxelize(const TriangleSurface& s, double h, InsideRule rule = InsideRule::Parity);
+// The generalized winding number of a point with respect to a triangle soup.
+double winding_number(const TriangleSurface& s, const std::array<double, 3>& p);
 
 // Binds every surface vertex to the kept cell that contains it (or the nearest one, for a vertex in a
 // cell whose centre was outside) by the trilinear weights of the cell's eight nodes.
-EmbeddedSurface embed(const TriangleSurface& s, const Lattice& lattice);
+// Vertices farther than two cells from every kept cell are an error (a feature too thin for the
+// cells), unless far_vertices is given: then they follow their nearest kept cell, its trilinear map
+// extrapolated (exact for the affine part of its motion, as a finger moving with a hand), and are
+// counted there.
+EmbeddedSurface embed(const TriangleSurface& s, const Lattice& lattice, long long* far_vertices = nullptr);
 
 }  // namespace sinew

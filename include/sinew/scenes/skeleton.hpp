@@ -82,13 +82,24 @@ struct BoneParameters {
 
 struct SkeletonParameters {
   NamedSections<BoneParameters> bones;
-  std::string motion_file;
+  std::string motion_file, rig, clip;
   bool skinning = true;
-  double falloff = 0.0;
+  double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0;
 
   template <class V>
   void visit(V& v) {
     v.sections("Bones", bones, "one sublist per bone, named as the bone");
+    v.entry("Rig", rig, std::string(""),
+            "bones from a rigged character's joints instead of Bones (see sinew-rig): each joint that moves skin holds "
+            "the lattice nodes within 'Bone radius' of the segment to its first child joint (a node near several "
+            "goes to the nearest) and follows the joint's motion in 'Clip' (made rigid by polar decomposition); a "
+            "relative path is taken from the scene file's folder");
+    v.entry("Clip", clip, std::string(""), "the rig's animation clip (empty: its first)");
+    v.entry("Clip start", clip_start, 0.0, "the clip's time, in seconds, at load 0 (its rest pose is the rig's)", Range::non_negative());
+    v.entry("Clip end", clip_end, -1.0, "the clip's time, in seconds, at load 1 (negative: the clip's end)");
+    v.entry("Bone radius", bone_radius, 0.0, "the radius of a joint's capsule (0: 1.5 lattice cells)", Range::non_negative());
+    v.entry("Clip samples per second", sample_rate, 30.0, "how densely the clip is sampled into frames (slerp between them)",
+            Range::closed(1.0, 10000.0));
     v.entry("Motion file", motion_file, std::string(""),
             "CSV of world transforms instead of keyframes: lines 'frame,bone,r00,r01,r02,r10,r11,r12,r20,r21,r22,tx,ty,tz' "
             "(frames 0..F-1 spread evenly over the load; a relative path is taken from the scene file's folder)");
@@ -115,8 +126,13 @@ class Skeleton {
   // by linear-blend skinning. X: reference coordinates of local nodes; free[n]: node n is not attached.
   void skin(double t0, double t1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const;
   bool skinning() const { return skinning_; }
+  // A skeleton from a rig: joints whose capsule held no node, and the largest entry by which a joint's
+  // motion departed from a rotation (made rigid by polar decomposition).
+  int unused_joints() const { return unused_joints_; }
+  double nonrigid() const { return nonrigid_; }
 
  private:
+  void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
   struct Bone {
     std::string name;
     int parent = -1;
@@ -129,11 +145,21 @@ class Skeleton {
   std::vector<Bone> bones_;
   bool skinning_ = true;
   double falloff_ = 4.0;
+  int unused_joints_ = 0;
+  double nonrigid_ = 0.0;
   std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
 };
 
 template <class Context>
 void SkeletonParameters::check(const Context& c) const {
+  if (!rig.empty()) {
+    if (!bones.empty()) c.fail("give 'Bones' or a 'Rig' (whose joints are the bones), not both");
+    if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
+    if (clip_end >= 0.0 && !(clip_end > clip_start)) c.fail("'Clip end' must exceed 'Clip start'");
+  } else {
+    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second"})
+      if (c.given(rig_only)) c.fail("'" + std::string(rig_only) + "' applies to a skeleton from a 'Rig' only");
+  }
   std::map<std::string, std::string> parent_of;
   for (const auto& [name, b] : bones) parent_of[name] = b.parent;
   for (const auto& [name, b] : bones) {
