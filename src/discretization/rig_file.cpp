@@ -40,20 +40,7 @@ bool finite(const Affine& a) {
   return finite3(a.t);
 }
 
-Mat3 rotation(const std::array<double, 4>& q) {  // unit quaternion w, x, y, z
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  Mat3 R;
-  R(0, 0) = 1 - 2 * (y * y + z * z);
-  R(0, 1) = 2 * (x * y - w * z);
-  R(0, 2) = 2 * (x * z + w * y);
-  R(1, 0) = 2 * (x * y + w * z);
-  R(1, 1) = 1 - 2 * (x * x + z * z);
-  R(1, 2) = 2 * (y * z - w * x);
-  R(2, 0) = 2 * (x * z - w * y);
-  R(2, 1) = 2 * (y * z + w * x);
-  R(2, 2) = 1 - 2 * (x * x + y * y);
-  return R;
-}
+Mat3 rotation(const std::array<double, 4>& q) { return rotation_of_quaternion(q[0], q[1], q[2], q[3]); }  // w, x, y, z
 
 // The keys around `t`: index k and fraction f with the value between keys k and k + 1 (held outside).
 template <class Key>
@@ -318,12 +305,7 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes) {
   }
   if (volume < 0.0)
     for (auto& T : s.triangles) std::swap(T[1], T[2]);
-  s.lower = s.upper = s.vertices.front();
-  for (const auto& p : s.vertices)
-    for (int d = 0; d < 3; ++d) {
-      s.lower[d] = std::min(s.lower[d], p[d]);
-      s.upper[d] = std::max(s.upper[d], p[d]);
-    }
+  s.set_bounds();
   return s;
 }
 

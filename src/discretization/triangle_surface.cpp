@@ -228,13 +228,17 @@ TriangleSurface read_triangle_surface(const std::string& path) {
     bad(path, "unknown surface format '." + ext + "' (Sinew reads .obj and .stl)");
   if (s.triangles.size() < 4) bad(path, "the surface has " + std::to_string(s.triangles.size()) + " triangles: no closed surface");
   check_closed_and_orient(s);
-  s.lower = s.upper = s.vertices.front();
-  for (const auto& p : s.vertices)
-    for (int d = 0; d < 3; ++d) {
-      s.lower[d] = std::min(s.lower[d], p[d]);
-      s.upper[d] = std::max(s.upper[d], p[d]);
-    }
+  s.set_bounds();
   return s;
+}
+
+void TriangleSurface::set_bounds() {
+  lower = upper = vertices.front();
+  for (const auto& p : vertices)
+    for (int d = 0; d < 3; ++d) {
+      lower[d] = std::min(lower[d], p[d]);
+      upper[d] = std::max(upper[d], p[d]);
+    }
 }
 
 InsideTest::InsideTest(const TriangleSurface& s) : s_(s) {

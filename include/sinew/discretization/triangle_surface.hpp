@@ -26,6 +26,7 @@ struct TriangleSurface {
   std::vector<std::array<double, 3>> vertices;
   std::vector<std::array<int, 3>> triangles;
   std::array<double, 3> lower{}, upper{};  // bounding box
+  void set_bounds();                        // lower and upper from the vertices (at least one)
 };
 
 // Throws InputError (kind File for an unreadable file, BadMesh for a broken or open surface).
