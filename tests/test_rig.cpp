@@ -328,3 +328,60 @@ TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
               static_cast<long long>(mesh.global_elements), lattice, enclosed, skeleton.size(), skeleton.unused_joints(),
               skeleton.nonrigid(), err, moved);
 }
+
+TEST(RigScene, TheFilesSkinWeightsCanGuideTheFirstGuess) {
+  // With 'Rig skinning weights', a node's skinning weights are those of the nearest skin vertex at rest
+  // (over the joints that became bones, renormalized), found here by brute force.
+  const std::string xml = std::string(R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="rig_weights"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="rig"/>
+    <Parameter name="Rig" type="string" value=")x") + kEpileptic + R"x("/>
+    <Parameter name="Cell size" type="double" value="0.04"/>
+  </ParameterList>
+  <ParameterList name="Material"><Parameter name="Model" type="string" value="stable-neohookean"/></ParameterList>
+  <ParameterList name="Skeleton">
+    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
+    <Parameter name="Bone radius" type="double" value="0.03"/>
+    <Parameter name="Rig skinning weights" type="bool" value="true"/>
+  </ParameterList>
+</ParameterList>)x";
+  Simulation sim(test::config(xml, "test_results/rig/weights"), RunOptions{true, ""});
+  const Mesh& mesh = sim.scene().system().mesh();
+  const Skeleton& skeleton = sim.scene().skeleton();
+  const RigFile rig = read_rig_file(kEpileptic);
+  std::map<std::string, int> bone;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) bone[skeleton.name(b)] = static_cast<int>(b);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  int checked = 0;
+  for (std::size_t n = 0; n < mesh.n_owned_nodes; n += 97) {
+    double best = HUGE_VAL;
+    std::map<int, double> expect;
+    for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
+      const auto x = rig.skin(static_cast<int>(m), nullptr, 0.0);
+      for (std::size_t v = 0; v < x.size(); ++v) {
+        std::map<int, double> w;
+        for (const auto& b : rig.meshes[m].bones) {
+          const auto it = bone.find(rig.nodes[b.node].name);
+          if (it == bone.end()) continue;
+          for (const auto& [vv, wt] : b.weights)
+            if (vv == static_cast<int>(v)) w[it->second] += wt;
+        }
+        if (w.empty()) continue;
+        const double d = std::pow(x[v][0] - X(n, 0), 2) + std::pow(x[v][1] - X(n, 1), 2) + std::pow(x[v][2] - X(n, 2), 2);
+        if (d < best) {
+          best = d;
+          expect = w;
+        }
+      }
+    }
+    double total = 0.0;
+    for (const auto& [b, w] : expect) total += w;
+    std::map<int, double> got;
+    for (const auto& [b, w] : skeleton.weights(n)) got[b] += w;
+    ASSERT_EQ(got.size(), expect.size()) << "node " << n;
+    for (const auto& [b, w] : expect) EXPECT_NEAR(got[b], w / total, 1e-12) << "node " << n << ", bone " << skeleton.name(b);
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
+}

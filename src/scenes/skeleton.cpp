@@ -281,6 +281,42 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     bones_.push_back(std::move(bone));
   }
   if (bones_.empty()) throw InputError(where + ": no joint of " + p.rig + " holds a lattice node within 'Bone radius' " + std::to_string(radius));
+  if (!p.rig_weights) return;
+  // The file's own skinning weights for the first guess: each owned node takes those of the nearest
+  // skin vertex at rest, over the joints that became bones (renormalized; none left: distance weights).
+  std::vector<int> bone_of(rig.nodes.size(), -1);
+  for (std::size_t k = 0; k < bones_.size(); ++k) bone_of[rig.node_index(bones_[k].name)] = static_cast<int>(k);
+  std::vector<std::array<double, 3>> vx;
+  std::vector<std::vector<std::pair<int, double>>> vw;
+  for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
+    const auto x = rig.skin(static_cast<int>(m), nullptr, 0.0);
+    std::vector<std::vector<std::pair<int, double>>> w(x.size());
+    for (const auto& bone : rig.meshes[m].bones)
+      if (bone_of[bone.node] >= 0)
+        for (const auto& [v, wt] : bone.weights) w[v].emplace_back(bone_of[bone.node], wt);
+    vx.insert(vx.end(), x.begin(), x.end());
+    vw.insert(vw.end(), w.begin(), w.end());
+  }
+  rig_weights_.assign(mesh.n_owned_nodes, {});
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long long n = 0; n < static_cast<long long>(mesh.n_owned_nodes); ++n) {
+    double best = HUGE_VAL;
+    std::size_t at = 0;
+    for (std::size_t v = 0; v < vx.size(); ++v) {
+      double d = 0.0;
+      for (int i = 0; i < 3; ++i) d += (vx[v][i] - Xh(n, i)) * (vx[v][i] - Xh(n, i));
+      if (d < best && !vw[v].empty()) {
+        best = d;
+        at = v;
+      }
+    }
+    if (best == HUGE_VAL) continue;
+    double total = 0.0;
+    for (const auto& bw : vw[at]) total += bw.second;
+    auto w = vw[at];
+    for (auto& bw : w) bw.second /= total;
+    rig_weights_[n] = std::move(w);
+  }
 }
 
 Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where)
@@ -374,6 +410,9 @@ Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos:
     for (auto& [b, v] : w) v /= total;
     weights_[n] = std::move(w);
   }
+  for (std::size_t n = 0; n < rig_weights_.size(); ++n)
+    if (!rig_weights_[n].empty()) weights_[n] = std::move(rig_weights_[n]);
+  rig_weights_.clear();
 }
 
 Rigid Skeleton::local(const Bone& b, double t) const {

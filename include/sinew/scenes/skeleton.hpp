@@ -85,6 +85,7 @@ struct SkeletonParameters {
   std::string motion_file, rig, clip;
   bool skinning = true;
   double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0;
+  bool rig_weights = false;
 
   template <class V>
   void visit(V& v) {
@@ -100,6 +101,10 @@ struct SkeletonParameters {
     v.entry("Bone radius", bone_radius, 0.0, "the radius of a joint's capsule (0: 1.5 lattice cells)", Range::non_negative());
     v.entry("Clip samples per second", sample_rate, 30.0, "how densely the clip is sampled into frames (slerp between them)",
             Range::closed(1.0, 10000.0));
+    v.entry("Rig skinning weights", rig_weights, false,
+            "with a Rig: the skinning guess takes each node's bone weights from the nearest skin vertex's weights in "
+            "the file instead of Sinew's distance weights ('Skinning falloff'); on inputs/rig_human.xml both take 45-46 "
+            "Newton iterations, as does no skinning guess");
     v.entry("Motion file", motion_file, std::string(""),
             "CSV of world transforms instead of keyframes: lines 'frame,bone,r00,r01,r02,r10,r11,r12,r20,r21,r22,tx,ty,tz' "
             "(frames 0..F-1 spread evenly over the load; a relative path is taken from the scene file's folder)");
@@ -129,6 +134,8 @@ class Skeleton {
   // A skeleton from a rig: joints whose capsule held no node, and the largest entry by which a joint's
   // motion departed from a rotation (made rigid by polar decomposition).
   int unused_joints() const { return unused_joints_; }
+  // The skinning guess's weights of an owned node: (bone, weight), summing to 1.
+  const std::vector<std::pair<int, double>>& weights(std::size_t owned_node) const { return weights_.at(owned_node); }
   double nonrigid() const { return nonrigid_; }
 
  private:
@@ -146,6 +153,7 @@ class Skeleton {
   bool skinning_ = true;
   double falloff_ = 4.0;
   int unused_joints_ = 0;
+  std::vector<std::vector<std::pair<int, double>>> rig_weights_;  // per owned node, from the file's skin
   double nonrigid_ = 0.0;
   std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
 };
@@ -157,7 +165,7 @@ void SkeletonParameters::check(const Context& c) const {
     if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
     if (clip_end >= 0.0 && !(clip_end > clip_start)) c.fail("'Clip end' must exceed 'Clip start'");
   } else {
-    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second"})
+    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights"})
       if (c.given(rig_only)) c.fail("'" + std::string(rig_only) + "' applies to a skeleton from a 'Rig' only");
   }
   std::map<std::string, std::string> parent_of;
