@@ -36,6 +36,9 @@ def parse_args(argv):
     p.add_argument("--size", default="1200x900", help="picture size WxH in pixels (default 1200x900)")
     p.add_argument("--view", default="iso", choices=["iso", "x", "y", "z", "-x", "-y", "-z"],
                    help="camera direction: iso (default) or looking along an axis")
+    p.add_argument("--up", default="z", choices=["z", "y"],
+                   help="the body's up axis: z (default) or y (characters from glTF, Maya or X files); a y-up "
+                        "body is turned so that it stands")
     p.add_argument("--rest", action="store_true", help="also draw the rest shape as a faint wireframe")
     p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
     p.add_argument("--skin", action="store_true",
@@ -152,6 +155,12 @@ def main(argv):
         shown += chosen
         all_steps += steps
     lo, hi = bounds_of_run(all_steps)
+    data_lo, data_hi = lo.copy(), hi.copy()  # in the data's own axes (for --cut)
+    # A y-up body is turned by +90 degrees about x, (x, y, z) -> (x, -z, y), so that it stands on the
+    # z-up stage the layout and cameras below assume.
+    rotate = [90.0, 0.0, 0.0] if a.up == "y" else [0.0, 0.0, 0.0]
+    if a.up == "y":
+        lo, hi = np.array([lo[0], -hi[2], lo[1]]), np.array([hi[0], -lo[2], hi[1]])
     if a.range:
         try:
             crange = tuple(float(v) for v in a.range.split(","))
@@ -194,6 +203,7 @@ def main(argv):
             if not os.path.exists(obj):
                 fail(f"no {obj}: --skin needs a voxelized run (Mesh/Type voxelize) with 'Surface OBJ' on")
             moved = pv.Transform(Input=pv.OpenDataFile(obj))
+            moved.Transform.Rotate = rotate
             moved.Transform.Translate = shift
             d = pv.Show(moved, view)
             d.ColorArrayName = [None, ""]
@@ -206,7 +216,7 @@ def main(argv):
                 axis = "xyz".index(a.cut)
                 body = pv.Clip(Input=at)
                 body.ClipType = "Plane"
-                body.ClipType.Origin = list(0.5 * (lo + hi))
+                body.ClipType.Origin = list(0.5 * (data_lo + data_hi))
                 body.ClipType.Normal = [1.0 if k == axis else 0.0 for k in range(3)]
                 body.Invert = 0
                 try:
@@ -214,6 +224,7 @@ def main(argv):
                 except AttributeError:
                     pass
             moved = pv.Transform(Input=body)
+            moved.Transform.Rotate = rotate
             moved.Transform.Translate = shift
             surface = pv.ExtractSurface(Input=moved)
             d = pv.Show(surface, view)
@@ -224,6 +235,7 @@ def main(argv):
             d.LookupTable = lut
         if a.rest:
             rest = pv.Transform(Input=pv.ForceTime(Input=reader, ForcedTime=0.0, IgnorePipelineTime=1))
+            rest.Transform.Rotate = rotate
             rest.Transform.Translate = shift
             r = pv.Show(pv.ExtractSurface(Input=rest), view)
             r.Representation = "Wireframe"

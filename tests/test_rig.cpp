@@ -385,3 +385,46 @@ TEST(RigScene, TheFilesSkinWeightsCanGuideTheFirstGuess) {
   }
   EXPECT_GT(checked, 10);
 }
+
+TEST(RigScene, ARestTimeVoxelizesTheSkinAndStartsTheBonesInThatPose) {
+  // At 0.8 s of the clip the arms are away from the body: the skin is filled in that pose, and with
+  // the clip starting there every bone is at rest at load 0.
+  const std::string xml = std::string(R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="rig_rest"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="rig"/>
+    <Parameter name="Rig" type="string" value=")x") + kEpileptic + R"x("/>
+    <Parameter name="Cell size" type="double" value="0.04"/>
+  </ParameterList>
+  <ParameterList name="Material"><Parameter name="Model" type="string" value="stable-neohookean"/></ParameterList>
+  <ParameterList name="Skeleton">
+    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
+    <Parameter name="Rest time" type="double" value="0.8"/>
+    <Parameter name="Clip start" type="double" value="0.8"/>
+    <Parameter name="Clip end" type="double" value="1.2"/>
+    <Parameter name="Bone radius" type="double" value="0.03"/>
+  </ParameterList>
+</ParameterList>)x";
+  Simulation sim(test::config(xml, "test_results/rig/rest"), RunOptions{true, ""});
+  const Mesh& mesh = sim.scene().system().mesh();
+  const RigFile rig = read_rig_file(kEpileptic);
+  // The lattice lies where the skin is at 0.8 s, not at the bind pose: its box against both.
+  const TriangleSurface posed = rig_surface(rig, "", &rig.clips[0], 0.8), bind = rig_surface(rig, "");
+  double off_posed = 0.0, off_bind = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    off_posed = std::max({off_posed, std::fabs(mesh.lower[d] - posed.lower[d]), std::fabs(mesh.upper[d] - posed.upper[d])});
+    off_bind = std::max({off_bind, std::fabs(mesh.lower[d] - bind.lower[d]), std::fabs(mesh.upper[d] - bind.upper[d])});
+  }
+  EXPECT_LT(off_posed, 0.1);  // within about two cells (thin fingers and toes may have no cell)
+  EXPECT_GT(off_bind, 0.2);   // the raised arms are far outside the bind pose's box
+  const Skeleton& skeleton = sim.scene().skeleton();
+  double still = 0.0;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) {
+    const Rigid T = skeleton.transform(b, 0.0);
+    for (int k = 0; k < 9; ++k) still = std::max(still, std::fabs(T.R[k] - (k % 4 == 0 ? 1.0 : 0.0)));
+    for (int i = 0; i < 3; ++i) still = std::max(still, std::fabs(T.t[i]));
+  }
+  EXPECT_LT(still, 1e-12);
+  std::printf("[ info ] rest at 0.8 s: lattice box off the posed skin's by %.3f, the bind pose's by %.3f; bones at load 0 off rest by %.1e\n",
+              off_posed, off_bind, still);
+}

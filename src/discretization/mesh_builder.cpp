@@ -14,14 +14,22 @@ Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
   if (p.type == "voxelize" || p.type == "rig") {  // rank 0 fills the surface with cells, then it is distributed like a file
     collectively(raw_comm(comm), [&] {
       if (comm.getRank() != 0) return;
-      const TriangleSurface surface = p.type == "rig" ? rig_surface(read_rig_file(p.rig), p.rig_meshes) : read_triangle_surface(p.surface);
+      TriangleSurface surface;
+      if (p.type == "rig") {
+        const RigFile rig = read_rig_file(p.rig);
+        const RigClip* clip = p.rig_rest_time >= 0.0 ? rig.clip(p.rig_rest_clip) : nullptr;
+        if (p.rig_rest_time >= 0.0 && !clip) throw InputError(p.rig + ": no clip '" + p.rig_rest_clip + "' for the rest pose");
+        surface = rig_surface(rig, p.rig_meshes, clip, p.rig_rest_time);
+      } else {
+        surface = read_triangle_surface(p.surface);
+      }
       Lattice lattice = voxelize(surface, p.cell_size, p.type == "rig" ? InsideRule::Winding : InsideRule::Parity);
       long long far = 0;
       skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice, p.type == "rig" ? &far : nullptr));
       if (far > 0)
         lattice.mesh.notes.push_back(std::to_string(far) + " of " + std::to_string(surface.vertices.size()) +
                                      " skin vertices lie more than two cells from the lattice (parts thinner than a cell); "
-                                     "they follow their nearest cell's motion, extrapolated");
+                                     "each follows the cell of the nearest placed vertex along the skin, extrapolated");
       file = std::move(lattice.mesh);
     });
     Mesh mesh = distribute_mesh(std::move(file), comm);

@@ -270,7 +270,13 @@ RigFile read_rig_file(const std::string& path) {
   return rig;
 }
 
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes) {
+const RigClip* RigFile::clip(const std::string& name) const {
+  for (const auto& c : clips)
+    if (name.empty() || c.name == name) return &c;
+  return nullptr;
+}
+
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {
   std::vector<int> chosen;
   std::stringstream list(meshes);
   for (std::string name; std::getline(list, name, ',');) {
@@ -293,7 +299,7 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes) {
   s.path = rig.path;
   for (int m : chosen) {
     const int base = static_cast<int>(s.vertices.size());
-    const auto x = rig.skin(m, nullptr, 0.0);
+    const auto x = rig.skin(m, clip, seconds);
     s.vertices.insert(s.vertices.end(), x.begin(), x.end());
     for (const auto& t : rig.meshes[m].triangles) s.triangles.push_back({base + t[0], base + t[1], base + t[2]});
   }

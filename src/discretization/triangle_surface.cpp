@@ -427,15 +427,15 @@ EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L, long long* far
   out.rest = s.vertices;
   out.triangles = s.triangles;
   const int nx = L.cells[0], ny = L.cells[1], nz = L.cells[2];
-  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+  const std::size_t nv = s.vertices.size();
+  // 1. Each vertex's cell: the one containing it, or the kept cell nearest to it within two cells.
+  std::vector<std::array<int, 4>> cell(nv, {-1, 0, 0, 0});  // element, i, j, k
+  for (std::size_t v = 0; v < nv; ++v) {
     const auto& p = s.vertices[v];
     int c[3];
     for (int d = 0; d < 3; ++d) c[d] = std::clamp(static_cast<int>(std::floor((p[d] - L.origin[d]) / L.h)), 0, L.cells[d] - 1);
-    // The containing cell, or the kept cell nearest to the vertex within two cells around it.
-    int best = -1, bi = 0, bj = 0, bk = 0;
     double best_d = HUGE_VAL;
-    const int rings = far_vertices ? std::max({nx, ny, nz}) : 2;
-    for (int r = 0; r <= rings && best < 0; ++r)
+    for (int r = 0; r <= 2 && cell[v][0] < 0; ++r)
       for (int k = std::max(0, c[2] - r); k <= std::min(nz - 1, c[2] + r); ++k)
         for (int j = std::max(0, c[1] - r); j <= std::min(ny - 1, c[1] + r); ++j)
           for (int i = std::max(0, c[0] - r); i <= std::min(nx - 1, c[0] + r); ++i) {
@@ -446,24 +446,65 @@ EmbeddedSurface embed(const TriangleSurface& s, const Lattice& L, long long* far
             const double d2 = dx * dx + dy * dy + dz * dz;
             if (d2 < best_d) {
               best_d = d2;
-              best = e;
-              bi = i;
-              bj = j;
-              bk = k;
+              cell[v] = {e, i, j, k};
             }
           }
-    if (far_vertices && best >= 0 && std::sqrt(best_d) > 2.5 * L.h) ++*far_vertices;
-    if (best < 0)
+    if (cell[v][0] < 0 && !far_vertices)
       bad(s.path, "surface vertex " + std::to_string(v + 1) + " is more than two cells from the lattice (in a piece too thin for "
                   "the cells, or one that was removed); choose a smaller 'Cell size'");
-    // Trilinear weights in the cell (slightly outside it for a vertex in a neighbouring empty cell).
+  }
+  // 2. A vertex farther away (a finger thinner than the cells) takes the cell of the nearest placed
+  //    vertex along the surface (breadth first over its edges): the finger follows its hand, not the
+  //    thigh that may lie nearer in space.
+  if (far_vertices) {
+    std::vector<std::vector<int>> next(nv);
+    for (const auto& T : s.triangles)
+      for (int a = 0; a < 3; ++a) {
+        next[T[a]].push_back(T[(a + 1) % 3]);
+        next[T[(a + 1) % 3]].push_back(T[a]);
+      }
+    std::vector<int> queue;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (cell[v][0] >= 0) queue.push_back(static_cast<int>(v));
+    for (std::size_t q = 0; q < queue.size(); ++q)
+      for (int w : next[queue[q]])
+        if (cell[w][0] < 0) {
+          cell[w] = cell[queue[q]];
+          ++*far_vertices;
+          queue.push_back(w);
+        }
+    // A piece of surface with no placed vertex at all (a loose shell thinner than the cells): the
+    // kept cell nearest in space.
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (cell[v][0] >= 0) continue;
+      const auto& p = s.vertices[v];
+      double best_d = HUGE_VAL;
+      for (std::size_t k = 0; k < static_cast<std::size_t>(nz); ++k)
+        for (std::size_t j = 0; j < static_cast<std::size_t>(ny); ++j)
+          for (std::size_t i = 0; i < static_cast<std::size_t>(nx); ++i) {
+            const int e = L.cell_element[(k * ny + j) * nx + i];
+            if (e < 0) continue;
+            const double dx = L.origin[0] + (i + 0.5) * L.h - p[0], dy = L.origin[1] + (j + 0.5) * L.h - p[1],
+                         dz = L.origin[2] + (k + 0.5) * L.h - p[2];
+            if (dx * dx + dy * dy + dz * dz < best_d) {
+              best_d = dx * dx + dy * dy + dz * dz;
+              cell[v] = {e, static_cast<int>(i), static_cast<int>(j), static_cast<int>(k)};
+            }
+          }
+      ++*far_vertices;
+    }
+  }
+  // 3. Trilinear weights in the cell (outside it, extrapolated, for a vertex beyond it).
+  const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto& p = s.vertices[v];
+    const auto [e, bi, bj, bk] = cell[v];
     const double xi[3] = {(p[0] - (L.origin[0] + bi * L.h)) / L.h, (p[1] - (L.origin[1] + bj * L.h)) / L.h,
                           (p[2] - (L.origin[2] + bk * L.h)) / L.h};
-    const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
     std::array<GlobalId, 8> nodes;
     std::array<double, 8> w;
     for (int a = 0; a < 8; ++a) {
-      nodes[a] = L.mesh.conn[8 * static_cast<std::size_t>(best) + a];
+      nodes[a] = L.mesh.conn[8 * static_cast<std::size_t>(e) + a];
       w[a] = 1.0;
       for (int d = 0; d < 3; ++d) w[a] *= corner[a][d] ? xi[d] : 1.0 - xi[d];
     }

@@ -20,6 +20,13 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
     c.params = parse_section<SceneFileParameters>(*params, "the top-level list");
     if (c.params.time.dynamic() && params->isSublist("Loading") && params->sublist("Loading").isParameter("Steps"))
       throw InputError("Loading: 'Steps' does not apply to a dynamic run (Time/Frames and Substeps set the time steps)");
+    // A rig's rest pose is one for the skin and the bones: the Skeleton says it, the Mesh follows.
+    if (c.params.skeleton.rest_time >= 0.0) {
+      if (c.params.mesh.type != "rig" || c.params.mesh.rig != c.params.skeleton.rig)
+        throw InputError("Skeleton: 'Rest time' needs Mesh/Type rig with the same 'Rig' file (the skin is voxelized in that pose)");
+      c.params.mesh.rig_rest_clip = c.params.skeleton.clip;
+      c.params.mesh.rig_rest_time = c.params.skeleton.rest_time;
+    }
   } catch (const InputError& e) {
     throw e.prefixed(name + ": ");
   }
@@ -52,7 +59,8 @@ void check_mesh_file(const SceneConfig& c) {
     // A rig: the file, the meshes named as the flesh, the clip named for the bones.
     if (p.mesh.type == "rig") {
       try {
-        rig_surface(read_rig_file(p.mesh.rig), p.mesh.rig_meshes);
+        const RigFile rig = read_rig_file(p.mesh.rig);
+        rig_surface(rig, p.mesh.rig_meshes, p.mesh.rig_rest_time >= 0.0 ? rig.clip(p.mesh.rig_rest_clip) : nullptr, p.mesh.rig_rest_time);
       } catch (const InputError& e) {
         throw e.prefixed("Mesh: ");
       }

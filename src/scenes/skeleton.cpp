@@ -210,7 +210,8 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   const double t0 = p.clip_start, t1 = p.clip_end >= 0.0 ? p.clip_end : clip->duration;
   if (!(t1 > t0)) throw InputError(where + ": 'Clip start' " + std::to_string(t0) + " is not before the clip's end " + std::to_string(t1));
   // Each joint's capsule at rest: from its origin to its first child joint's (a point for a leaf).
-  const std::vector<Affine> rest = rig.pose(nullptr, 0.0);
+  const RigClip* rest_clip = p.rest_time >= 0.0 ? clip : nullptr;  // the rest pose: a clip frame or the bind pose
+  const std::vector<Affine> rest = rig.pose(rest_clip, p.rest_time);
   std::vector<int> joints;
   std::vector<std::array<double, 3>> a, b;
   for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
@@ -289,7 +290,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   std::vector<std::array<double, 3>> vx;
   std::vector<std::vector<std::pair<int, double>>> vw;
   for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
-    const auto x = rig.skin(static_cast<int>(m), nullptr, 0.0);
+    const auto x = rig.skin(static_cast<int>(m), rest_clip, p.rest_time);
     std::vector<std::vector<std::pair<int, double>>> w(x.size());
     for (const auto& bone : rig.meshes[m].bones)
       if (bone_of[bone.node] >= 0)

@@ -39,6 +39,10 @@ inline const Choices<ElementType>& element_choices() {
 struct MeshParameters {
   std::string type, file, surface, rig, rig_meshes;
   double cell_size = 0.0;
+  // Not entries: the scene sets them from Skeleton/Clip and Skeleton/Rest time (the pose a rig's skin is
+  // voxelized in; rest_time < 0: the bind pose).
+  std::string rig_rest_clip;
+  double rig_rest_time = -1.0;
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{};
   std::array<double, 3> lower{}, upper{};

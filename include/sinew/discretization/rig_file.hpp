@@ -87,6 +87,7 @@ struct RigFile {
   std::vector<RigClip> clips;
 
   int node_index(const std::string& name) const;  // -1 when absent
+  const RigClip* clip(const std::string& name) const;  // by name (empty: the first); nullptr when absent
   // World transform of a node at `seconds` into `clip` (nullptr: the rest pose).
   Affine world(int node, const RigClip* clip, double seconds) const;
   // World transforms of every node at once (cheaper than calling world() per node).
@@ -101,10 +102,10 @@ struct RigFile {
 // Weights are normalized per vertex (exporters round them).
 RigFile read_rig_file(const std::string& path);
 
-// The skin at the rest pose as one triangle soup: the named meshes (comma-separated; empty: all), each
-// skinned at the rest pose; turned outward as a whole when its signed volume is negative. Throws
-// InputError naming a mesh the file does not have (and those it has).
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes);
+// The skin as one triangle soup: the named meshes (comma-separated; empty: all), each skinned at the
+// pose of `clip` at `seconds` (nullptr: the bind pose); turned outward as a whole when its signed
+// volume is negative. Throws InputError naming a mesh the file does not have (and those it has).
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip = nullptr, double seconds = 0.0);
 
 // A listing of the file for a user choosing meshes, joints and clips (sinew-rig).
 std::string describe(const RigFile& rig);

@@ -64,9 +64,9 @@ double winding_number(const TriangleSurface& s, const std::array<double, 3>& p);
 // Binds every surface vertex to the kept cell that contains it (or the nearest one, for a vertex in a
 // cell whose centre was outside) by the trilinear weights of the cell's eight nodes.
 // Vertices farther than two cells from every kept cell are an error (a feature too thin for the
-// cells), unless far_vertices is given: then they follow their nearest kept cell, its trilinear map
-// extrapolated (exact for the affine part of its motion, as a finger moving with a hand), and are
-// counted there.
+// cells), unless far_vertices is given: then each takes the cell of the nearest placed vertex along
+// the surface's edges (a finger follows its hand, not a thigh nearer in space), its trilinear map
+// extrapolated (exact for the affine part of the cell's motion), and they are counted there.
 EmbeddedSurface embed(const TriangleSurface& s, const Lattice& lattice, long long* far_vertices = nullptr);
 
 }  // namespace sinew

@@ -84,7 +84,7 @@ struct SkeletonParameters {
   NamedSections<BoneParameters> bones;
   std::string motion_file, rig, clip;
   bool skinning = true;
-  double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0;
+  double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0, rest_time = -1.0;
   bool rig_weights = false;
 
   template <class V>
@@ -96,7 +96,11 @@ struct SkeletonParameters {
             "goes to the nearest) and follows the joint's motion in 'Clip' (made rigid by polar decomposition); a "
             "relative path is taken from the scene file's folder");
     v.entry("Clip", clip, std::string(""), "the rig's animation clip (empty: its first)");
-    v.entry("Clip start", clip_start, 0.0, "the clip's time, in seconds, at load 0 (its rest pose is the rig's)", Range::non_negative());
+    v.entry("Clip start", clip_start, 0.0, "the clip's time, in seconds, at load 0", Range::non_negative());
+    v.entry("Rest time", rest_time, -1.0,
+            "the clip's time whose pose is the rest (stress-free) shape: the skin (Mesh/Type rig, the same file) is "
+            "voxelized in it and the bones move from it; negative: the file's bind pose. A pose with the arms away "
+            "from the body keeps a hand from fusing with a thigh");
     v.entry("Clip end", clip_end, -1.0, "the clip's time, in seconds, at load 1 (negative: the clip's end)");
     v.entry("Bone radius", bone_radius, 0.0, "the radius of a joint's capsule (0: 1.5 lattice cells)", Range::non_negative());
     v.entry("Clip samples per second", sample_rate, 30.0, "how densely the clip is sampled into frames (slerp between them)",
@@ -165,7 +169,7 @@ void SkeletonParameters::check(const Context& c) const {
     if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
     if (clip_end >= 0.0 && !(clip_end > clip_start)) c.fail("'Clip end' must exceed 'Clip start'");
   } else {
-    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights"})
+    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights", "Rest time"})
       if (c.given(rig_only)) c.fail("'" + std::string(rig_only) + "' applies to a skeleton from a 'Rig' only");
   }
   std::map<std::string, std::string> parent_of;
