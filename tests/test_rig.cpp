@@ -191,6 +191,32 @@ TEST(RigFile, BrokenFilesAreNamed) {
 
 namespace {
 
+// A scene on Debian's rigged human: its skin filled with cells of `cell`, bones from its joints with
+// 3 cm capsules; `skeleton` adds Skeleton entries, `rest` whole sections (Loading, Solver, Output).
+std::string rig_scene(const std::string& name, double cell, const std::string& skeleton, const std::string& rest = "") {
+  return std::string(R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value=")x") + name + R"x("/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="rig"/>
+    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
+    <Parameter name="Cell size" type="double" value=")x" + std::to_string(cell) + R"x("/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="2.0e4"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Skeleton">
+    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
+    <Parameter name="Bone radius" type="double" value="0.03"/>)x" + skeleton + R"x(
+  </ParameterList>)x" + rest + R"x(
+</ParameterList>)x";
+}
+
+}  // namespace
+
+namespace {
+
 // The rotation nearest to A: A (A^T A)^(-1/2), from the eigen-decomposition of A^T A.
 Mat3 polar(const Mat3& A) {
   const Mat3 S = transpose(A) * A;
@@ -227,27 +253,10 @@ double segment_distance_to(const std::array<double, 3>& x, const std::array<doub
 TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
   // Debian's rigged human: its three open skin pieces filled by the winding number at 3 cm, bones from
   // its 54 joints, 0.1 s of its clip in one step.
-  const std::string xml = std::string(R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="rig"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="rig"/>
-    <Parameter name="Rig" type="string" value=")x") + kEpileptic + R"x("/>
-    <Parameter name="Cell size" type="double" value="0.03"/>
-  </ParameterList>
-  <ParameterList name="Material">
-    <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="2.0e4"/>
-    <Parameter name="Poisson ratio" type="double" value="0.45"/>
-  </ParameterList>
-  <ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
-  <ParameterList name="Skeleton">
-    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
-    <Parameter name="Clip end" type="double" value="0.1"/>
-    <Parameter name="Bone radius" type="double" value="0.03"/>
-  </ParameterList>
+  const std::string xml = rig_scene("rig", 0.03, R"x(<Parameter name="Clip end" type="double" value="0.1"/>)x",
+                                     R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
   <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-4"/></ParameterList>
-  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>
-</ParameterList>)x";
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
   Simulation sim(test::config(xml, "test_results/rig/scene"), RunOptions{true, ""});
   const Mesh& mesh = sim.scene().system().mesh();
   const Skeleton& skeleton = sim.scene().skeleton();
@@ -332,20 +341,7 @@ TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
 TEST(RigScene, TheFilesSkinWeightsCanGuideTheFirstGuess) {
   // With 'Rig skinning weights', a node's skinning weights are those of the nearest skin vertex at rest
   // (over the joints that became bones, renormalized), found here by brute force.
-  const std::string xml = std::string(R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="rig_weights"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="rig"/>
-    <Parameter name="Rig" type="string" value=")x") + kEpileptic + R"x("/>
-    <Parameter name="Cell size" type="double" value="0.04"/>
-  </ParameterList>
-  <ParameterList name="Material"><Parameter name="Model" type="string" value="stable-neohookean"/></ParameterList>
-  <ParameterList name="Skeleton">
-    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
-    <Parameter name="Bone radius" type="double" value="0.03"/>
-    <Parameter name="Rig skinning weights" type="bool" value="true"/>
-  </ParameterList>
-</ParameterList>)x";
+  const std::string xml = rig_scene("rig_weights", 0.04, R"x(<Parameter name="Rig skinning weights" type="bool" value="true"/>)x");
   Simulation sim(test::config(xml, "test_results/rig/weights"), RunOptions{true, ""});
   const Mesh& mesh = sim.scene().system().mesh();
   const Skeleton& skeleton = sim.scene().skeleton();
@@ -389,22 +385,9 @@ TEST(RigScene, TheFilesSkinWeightsCanGuideTheFirstGuess) {
 TEST(RigScene, ARestTimeVoxelizesTheSkinAndStartsTheBonesInThatPose) {
   // At 0.8 s of the clip the arms are away from the body: the skin is filled in that pose, and with
   // the clip starting there every bone is at rest at load 0.
-  const std::string xml = std::string(R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="rig_rest"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="rig"/>
-    <Parameter name="Rig" type="string" value=")x") + kEpileptic + R"x("/>
-    <Parameter name="Cell size" type="double" value="0.04"/>
-  </ParameterList>
-  <ParameterList name="Material"><Parameter name="Model" type="string" value="stable-neohookean"/></ParameterList>
-  <ParameterList name="Skeleton">
-    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
-    <Parameter name="Rest time" type="double" value="0.8"/>
+  const std::string xml = rig_scene("rig_rest", 0.04, R"x(<Parameter name="Rest time" type="double" value="0.8"/>
     <Parameter name="Clip start" type="double" value="0.8"/>
-    <Parameter name="Clip end" type="double" value="1.2"/>
-    <Parameter name="Bone radius" type="double" value="0.03"/>
-  </ParameterList>
-</ParameterList>)x";
+    <Parameter name="Clip end" type="double" value="1.2"/>)x");
   Simulation sim(test::config(xml, "test_results/rig/rest"), RunOptions{true, ""});
   const Mesh& mesh = sim.scene().system().mesh();
   const RigFile rig = read_rig_file(kEpileptic);
