@@ -8,6 +8,28 @@
 
 namespace sinew {
 
+namespace {
+
+// out(r, :) += s A(r, :) for the owned rows r (A's pattern lies within out's).
+template <class Out>
+void add_scaled(const CrsMatrix& A, double s, int owned, Out& out) {
+  auto local = A.getLocalMatrixHost();
+  std::vector<int> cols;
+  std::vector<double> vals;
+  for (int r = 0; r < owned; ++r) {
+    const auto row = local.row(r);
+    cols.resize(row.length);
+    vals.resize(row.length);
+    for (int k = 0; k < row.length; ++k) {
+      cols[k] = row.colidx(k);
+      vals[k] = s * row.value(k);
+    }
+    out.sumIntoValues(r, cols.data(), row.length, vals.data(), true, true);
+  }
+}
+
+}  // namespace
+
 static_assert(Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible,
               "the inertia term runs on the host: it needs host-accessible vectors and matrices");
 
@@ -90,32 +112,9 @@ void InertiaTerm::add(const TermInput& in, TermOutput& out) const {
         out.matrix.sumIntoValues(r, &r, 1, &v, true, true);
       }
     } else {
-      auto local = M_->getLocalMatrixHost();
-      for (int r = 0; r < owned; ++r) {
-        const auto row = local.row(r);
-        std::vector<int> cols(row.length);
-        std::vector<double> vals(row.length);
-        for (int k = 0; k < row.length; ++k) {
-          cols[k] = row.colidx(k);
-          vals[k] = sm * row.value(k);
-        }
-        out.matrix.sumIntoValues(r, cols.data(), row.length, vals.data(), true, true);
-      }
+      add_scaled(*M_, sm, owned, out.matrix);
     }
-    if (K_start_) {
-      auto local = K_start_->getLocalMatrixHost();
-      const double sk = beta_ / c_damping_;
-      for (int r = 0; r < owned; ++r) {
-        const auto row = local.row(r);
-        std::vector<int> cols(row.length);
-        std::vector<double> vals(row.length);
-        for (int k = 0; k < row.length; ++k) {
-          cols[k] = row.colidx(k);
-          vals[k] = sk * row.value(k);
-        }
-        out.matrix.sumIntoValues(r, cols.data(), row.length, vals.data(), true, true);
-      }
-    }
+    if (K_start_) add_scaled(*K_start_, beta_ / c_damping_, owned, out.matrix);
   }
   out.totals.inertia += energy;
   out.totals.energy += energy;
