@@ -882,13 +882,13 @@ TEST(Voxelize, ATruncatedBinaryStlIsNamedAsSuch) {
   }
 }
 
-TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
-  // The ball filled with cells of 0.25; every node moved by one affine map (all nodes prescribed):
-  // trilinear interpolation reproduces an affine field, so every skin vertex must land on the affine
-  // image of its rest position, on any number of ranks. A bone given as a surface takes exactly the
-  // lattice nodes inside it.
-  const std::string xml = R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="ball"/>
+namespace {
+
+// The ball (ball.obj) filled with cells of 0.25, Stable Neo-Hookean of Young modulus `young`; `rest`:
+// the Loading (and Solver) sections; no HDF5 output or checkpoints (the tests read the skin OBJs).
+std::string ball_scene(const std::string& name, double young, const std::string& rest) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value=")x" + name + R"x("/>
   <ParameterList name="Mesh">
     <Parameter name="Type" type="string" value="voxelize"/>
     <Parameter name="Surface" type="string" value=")x" + mesh_path("ball.obj") + R"x("/>
@@ -896,10 +896,25 @@ TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
   </ParameterList>
   <ParameterList name="Material">
     <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="1.0"/>
+    <Parameter name="Young modulus" type="double" value=")x" + std::to_string(young) + R"x("/>
     <Parameter name="Poisson ratio" type="double" value="0.45"/>
   </ParameterList>
-  <ParameterList name="Loading">
+)x" + rest + R"x(
+  <ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value="false"/>
+    <Parameter name="Checkpoint every" type="int" value="0"/>
+  </ParameterList>
+</ParameterList>)x";
+}
+
+}  // namespace
+
+TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
+  // The ball filled with cells of 0.25; every node moved by one affine map (all nodes prescribed):
+  // trilinear interpolation reproduces an affine field, so every skin vertex must land on the affine
+  // image of its rest position, on any number of ranks. A bone given as a surface takes exactly the
+  // lattice nodes inside it.
+  const std::string xml = ball_scene("ball", 1.0, R"x(  <ParameterList name="Loading">
     <Parameter name="Steps" type="int" value="1"/>
     <ParameterList name="Boundary conditions">
       <ParameterList name="everything">
@@ -909,12 +924,7 @@ TEST(Voxelize, TheSkinFollowsTheLatticeAndBonesTakeTheNodesInsideThem) {
         <Parameter name="Displacement" type="Array(double)" value="{0.5, 0, -0.25}"/>
       </ParameterList>
     </ParameterList>
-  </ParameterList>
-  <ParameterList name="Output">
-    <Parameter name="HDF5" type="bool" value="false"/>
-    <Parameter name="Checkpoint every" type="int" value="0"/>
-  </ParameterList>
-</ParameterList>)x";
+  </ParameterList>)x");
   const std::string dir = "test_results/voxel_ball" + tag();
   Simulation sim(config(xml, dir), RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
@@ -972,33 +982,16 @@ TEST(Voxelize, TheSkinFollowsASolvedDeformation) {
   // each skin vertex in a kept cell must sit at its rest position plus the trilinear interpolation of
   // the solved nodal displacements of that cell, computed here from the lattice and the gathered
   // solution (not from the embedding's weights).
-  const std::string xml = R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="ball_sag"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="voxelize"/>
-    <Parameter name="Surface" type="string" value=")x" + mesh_path("ball.obj") + R"x("/>
-    <Parameter name="Cell size" type="double" value="0.25"/>
-  </ParameterList>
-  <ParameterList name="Material">
-    <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="100.0"/>
-    <Parameter name="Poisson ratio" type="double" value="0.45"/>
-  </ParameterList>
-  <ParameterList name="Loading">
+  const std::string xml = ball_scene("ball_sag", 100.0, R"x(  <ParameterList name="Loading">
     <Parameter name="Steps" type="int" value="2"/>
     <Parameter name="Body force" type="Array(double)" value="{0.3, 0, -1.0}"/>
     <ParameterList name="Boundary conditions">
       <ParameterList name="base"><Parameter name="Region" type="string" value="face z-"/></ParameterList>
     </ParameterList>
   </ParameterList>
-  <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-8"/></ParameterList>
-  <ParameterList name="Output">
-    <Parameter name="HDF5" type="bool" value="false"/>
-    <Parameter name="Checkpoint every" type="int" value="0"/>
-  </ParameterList>
-</ParameterList>)x";
+  <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-8"/></ParameterList>)x");
   const std::string dir = "test_results/voxel_sag" + tag();
-  Simulation sim(config(xml, dir), RunOptions{std::getenv("SINEW_TEST_VERBOSE") == nullptr, ""});
+  Simulation sim(config(xml, dir), RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
   const auto u = gather(sim.displacement());  // by global id: the voxelizer's node order
   const TriangleSurface ball = read_triangle_surface(mesh_path("ball.obj"));
