@@ -152,31 +152,11 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
   return out;
 }
 
-// The inverse of an affine map.
-Affine inverse(const Affine& a) {
-  const Mat3& A = a.A;
-  const double d = det(A);
-  Mat3 B;
-  B(0, 0) = (A(1, 1) * A(2, 2) - A(1, 2) * A(2, 1)) / d;
-  B(0, 1) = (A(0, 2) * A(2, 1) - A(0, 1) * A(2, 2)) / d;
-  B(0, 2) = (A(0, 1) * A(1, 2) - A(0, 2) * A(1, 1)) / d;
-  B(1, 0) = (A(1, 2) * A(2, 0) - A(1, 0) * A(2, 2)) / d;
-  B(1, 1) = (A(0, 0) * A(2, 2) - A(0, 2) * A(2, 0)) / d;
-  B(1, 2) = (A(0, 2) * A(1, 0) - A(0, 0) * A(1, 2)) / d;
-  B(2, 0) = (A(1, 0) * A(2, 1) - A(1, 1) * A(2, 0)) / d;
-  B(2, 1) = (A(0, 1) * A(2, 0) - A(0, 0) * A(2, 1)) / d;
-  B(2, 2) = (A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0)) / d;
-  Affine out;
-  out.A = B;
-  for (int i = 0; i < 3; ++i) out.t[i] = -(B(i, 0) * a.t[0] + B(i, 1) * a.t[1] + B(i, 2) * a.t[2]);
-  return out;
-}
-
 // The rotation nearest to A (the polar factor, by Higham's iteration R <- (R + R^-T) / 2).
 Mat3 nearest_rotation(const Mat3& A) {
   Mat3 R = A;
   for (int it = 0; it < 30; ++it) {
-    const Mat3 Rt = transpose(inverse(Affine{R, {0, 0, 0}}).A);
+    const Mat3 Rt = (1.0 / det(R)) * cofactor(R);  // R^-T
     Mat3 next;
     double change = 0.0;
     for (int k = 0; k < 9; ++k) {
@@ -256,7 +236,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   for (int k = 0; k <= F; ++k) {
     const std::vector<Affine> W = rig.pose(clip, t0 + (t1 - t0) * k / F);
     for (std::size_t j = 0; j < joints.size(); ++j) {
-      const Affine D = W[joints[j]].after(inverse(rest[joints[j]]));
+      const Affine D = W[joints[j]].after(rest[joints[j]].inverse());
       Rigid T;
       T.R = nearest_rotation(D.A);
       for (int q = 0; q < 9; ++q) nonrigid_ = std::max(nonrigid_, std::fabs(T.R[q] - D.A[q]));

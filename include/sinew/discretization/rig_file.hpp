@@ -36,6 +36,14 @@ struct Affine {
     for (int i = 0; i < 3; ++i) y[i] = A(i, 0) * x[0] + A(i, 1) * x[1] + A(i, 2) * x[2] + t[i];
     return y;
   }
+  // x = A^-1 (y - t), with A^-1 = cofactor(A)^T / det A
+  Affine inverse() const {
+    Affine b;
+    b.A = (1.0 / det(A)) * transpose(cofactor(A));
+    const auto minus_t = b.apply(t);
+    for (int i = 0; i < 3; ++i) b.t[i] = -minus_t[i];
+    return b;
+  }
   // (this o b)(x) = this(b(x))
   Affine after(const Affine& b) const {
     Affine c;
