@@ -8,6 +8,7 @@
 #include <sinew/core/sym_eigen.hpp>
 #include <sinew/discretization/rig_file.hpp>
 #include <sinew/driver/run.hpp>
+#include <sinew/scenes/region.hpp>
 #include <sinew/scenes/scene.hpp>
 
 #include <Kokkos_Core.hpp>
@@ -234,19 +235,6 @@ Mat3 polar(const Mat3& A) {
   return A * inv_sqrt;
 }
 
-double segment_distance_to(const std::array<double, 3>& x, const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  double ab[3], ax[3], L = 0.0, t = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    ab[i] = b[i] - a[i];
-    ax[i] = x[i] - a[i];
-    L += ab[i] * ab[i];
-    t += ab[i] * ax[i];
-  }
-  t = L > 0.0 ? std::clamp(t / L, 0.0, 1.0) : 0.0;
-  double d = 0.0;
-  for (int i = 0; i < 3; ++i) d += (ax[i] - t * ab[i]) * (ax[i] - t * ab[i]);
-  return std::sqrt(d);
-}
 
 }  // namespace
 
@@ -289,12 +277,12 @@ TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
   std::vector<double> nearest(mesh.local_nodes(), HUGE_VAL);
   auto at = [&](std::size_t n) { return std::array<double, 3>{X(n, 0), X(n, 1), X(n, 2)}; };
   for (std::size_t n = 0; n < mesh.local_nodes(); ++n)
-    for (const auto& [name, c] : capsule) nearest[n] = std::min(nearest[n], segment_distance_to(at(n), c.first, c.second));
+    for (const auto& [name, c] : capsule) nearest[n] = std::min(nearest[n], segment_distance(at(n).data(), c.first, c.second));
   std::size_t held = 0;
   for (std::size_t b = 0; b < skeleton.size(); ++b) {
     const auto& c = capsule.at(skeleton.name(b));
     for (int n : skeleton.nodes(b)) {
-      const double d = segment_distance_to(at(n), c.first, c.second);
+      const double d = segment_distance(at(n).data(), c.first, c.second);
       EXPECT_LE(d, 0.03) << "node " << n << " of " << skeleton.name(b);
       EXPECT_NEAR(d, nearest[n], 1e-12) << "node " << n << " is nearer to another joint than to " << skeleton.name(b);
     }
