@@ -288,23 +288,80 @@ bool InsideTest::inside(const std::array<double, 3>& p) const {
   return crossings % 2 == 1;
 }
 
+namespace {
+// The solid angle of triangle T seen from p (Van Oosterom and Strackee:
+// tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|)).
+double solid_angle(const TriangleSurface& s, const std::array<int, 3>& T, const std::array<double, 3>& p) {
+  using namespace geom;
+  const Vec a = s.vertices[T[0]] - p, b = s.vertices[T[1]] - p, c = s.vertices[T[2]] - p;
+  const double la = norm(a), lb = norm(b), lc = norm(c);
+  const double det = dot(a, cross(b, c));
+  const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+  return 2.0 * std::atan2(det, den);
+}
+}  // namespace
+
 double winding_number(const TriangleSurface& s, const std::array<double, 3>& p) {
-  // Van Oosterom and Strackee: tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|).
   double total = 0.0;
-  for (const auto& T : s.triangles) {
-    double a[3], b[3], c[3];
-    for (int d = 0; d < 3; ++d) {
-      a[d] = s.vertices[T[0]][d] - p[d];
-      b[d] = s.vertices[T[1]][d] - p[d];
-      c[d] = s.vertices[T[2]][d] - p[d];
+  for (const auto& T : s.triangles) total += solid_angle(s, T, p);
+  return total / (4.0 * M_PI);
+}
+
+FastWindingNumber::FastWindingNumber(const TriangleSurface& s, double beta) : s_(s) {
+  using namespace geom;
+  std::vector<Box> boxes(s.triangles.size());
+  for (std::size_t t = 0; t < s.triangles.size(); ++t)
+    for (int v : s.triangles[t]) boxes[t].add(s.vertices[v]);
+  tree_.build(boxes);
+  // Each node's sums straight from its triangles: every level holds each triangle once, so the cost
+  // is O(triangles x depth).
+  far_.resize(tree_.node_count());
+  for (int i = 0; i < tree_.node_count(); ++i) {
+    Far& f = far_[i];
+    double area = 0.0;
+    Vec centroid{0.0, 0.0, 0.0}, abs_centroid{0.0, 0.0, 0.0};
+    for (int k = tree_.node_begin(i); k < tree_.node_end(i); ++k) {
+      const auto& T = s.triangles[tree_.item(k)];
+      const Vec an = 0.5 * cross(s.vertices[T[1]] - s.vertices[T[0]], s.vertices[T[2]] - s.vertices[T[0]]);
+      const double a = norm(an);
+      const Vec x = (1.0 / 3.0) * (s.vertices[T[0]] + s.vertices[T[1]] + s.vertices[T[2]]);
+      area += a;
+      centroid = centroid + a * x;
+      abs_centroid = abs_centroid + x;
+      f.N = f.N + an;
     }
-    const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]), lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]),
-                 lc = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-    const double den = la * lb * lc + (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * lc + (b[0] * c[0] + b[1] * c[1] + b[2] * c[2]) * la +
-                       (c[0] * a[0] + c[1] * a[1] + c[2] * a[2]) * lb;
-    total += 2.0 * std::atan2(det, den);
+    const int n = tree_.node_end(i) - tree_.node_begin(i);
+    f.c = area > 0.0 ? (1.0 / area) * centroid : (1.0 / n) * abs_centroid;  // degenerate triangles only
+    double radius2 = 0.0;
+    for (int k = tree_.node_begin(i); k < tree_.node_end(i); ++k) {
+      const auto& T = s.triangles[tree_.item(k)];
+      const Vec an = 0.5 * cross(s.vertices[T[1]] - s.vertices[T[0]], s.vertices[T[2]] - s.vertices[T[0]]);
+      const Vec d = (1.0 / 3.0) * (s.vertices[T[0]] + s.vertices[T[1]] + s.vertices[T[2]]) - f.c;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) f.T[a][b] += an[a] * d[b];
+      for (int v : T) radius2 = std::max(radius2, distance2(s.vertices[v], f.c));
+    }
+    f.r2 = beta * beta * radius2;
   }
+}
+
+double FastWindingNumber::operator()(const std::array<double, 3>& p) const {
+  using namespace geom;
+  double total = 0.0;  // 4 pi w
+  tree_.descend(
+      [&](int node) {
+        const Far& f = far_[node];
+        const Vec r = f.c - p;
+        const double r2 = dot(r, r);
+        if (r2 <= f.r2) return false;
+        const double inv = 1.0 / std::sqrt(r2), inv3 = inv * inv * inv, inv5 = inv3 * inv * inv;
+        double rTr = 0.0;
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) rTr += r[a] * f.T[a][b] * r[b];
+        total += dot(f.N, r) * inv3 + (f.T[0][0] + f.T[1][1] + f.T[2][2]) * inv3 - 3.0 * rTr * inv5;
+        return true;
+      },
+      [&](int t) { total += solid_angle(s_, s_.triangles[t], p); });
   return total / (4.0 * M_PI);
 }
 
@@ -338,11 +395,13 @@ Lattice voxelize(const TriangleSurface& s, double h, InsideRule rule) {
           if (test.inside({L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}))
             component[cell(i, j, k)] = -2;
   } else {
-    // Every cell against every triangle (threads over cells): cells x triangles solid angles.
+    // The fast (hierarchical) winding number per cell centre, threads over cells: the exact sum over
+    // every triangle took about 2 s for a 20k-triangle human at 3 cm cells and ~30 s at 1.2 cm.
+    const FastWindingNumber w(s);
 #pragma omp parallel for schedule(dynamic, 64)
     for (long long c = 0; c < static_cast<long long>(total); ++c) {
       const int i = static_cast<int>(c % nx), j = static_cast<int>((c / nx) % ny), k = static_cast<int>(c / (static_cast<long long>(nx) * ny));
-      if (winding_number(s, {L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}) > 0.5)
+      if (w({L.origin[0] + (i + 0.5) * h, L.origin[1] + (j + 0.5) * h, L.origin[2] + (k + 0.5) * h}) > 0.5)
         component[c] = -2;
     }
   }

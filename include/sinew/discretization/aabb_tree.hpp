@@ -2,6 +2,7 @@
 // items per leaf) with the three queries contact needs: the items whose box contains a point (which
 // element holds a surface sample), the items within a distance of a point (surface triangles near a
 // sample), and branch-and-bound nearest item (the closest surface point, the distance to a collider).
+// A fourth, descend, lets a caller treat a whole subtree in bulk (the far field of a fast winding number).
 // Host only; built in O(n log n), rebuilt when positions change.
 #pragma once
 
@@ -28,6 +29,34 @@ class AabbTree {
     split(0, static_cast<int>(boxes.size()), boxes);
   }
   bool empty() const { return nodes_.empty(); }
+
+  // The nodes, parents before children; node i holds the items item(begin)..item(end - 1) of its range.
+  int node_count() const { return static_cast<int>(nodes_.size()); }
+  const Box& node_box(int i) const { return nodes_[i].box; }
+  int node_begin(int i) const { return nodes_[i].begin; }
+  int node_end(int i) const { return nodes_[i].end; }
+  int item(int k) const { return items_[k]; }
+
+  // From the root down: bulk(node) returns true when it has accounted for the node's items as a whole
+  // (its subtree is skipped); otherwise the children are visited, and at a leaf fn(item) for each item.
+  template <class Bulk, class Fn>
+  void descend(Bulk&& bulk, Fn&& fn) const {
+    if (nodes_.empty()) return;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const int id = stack[--top];
+      const Node& n = nodes_[id];
+      if (bulk(id)) continue;
+      if (n.left < 0) {
+        for (int k = n.begin; k < n.end; ++k) fn(items_[k]);
+      } else {
+        stack[top++] = n.left;  // depth ~ log2(n) with median splits: far from 128
+        stack[top++] = n.right;
+      }
+    }
+  }
 
   // fn(item) for every item whose box contains p.
   template <class Fn>
@@ -83,7 +112,7 @@ class AabbTree {
   struct Node {
     Box box;
     int left = -1, right = -1;  // children; -1 for a leaf
-    int begin = 0, end = 0;     // a leaf's items_[begin, end)
+    int begin = 0, end = 0;     // the node's items_[begin, end)
   };
 
   int split(int begin, int end, const std::vector<Box>& boxes) {
@@ -95,11 +124,9 @@ class AabbTree {
       centers.add(boxes[items_[k]].center());
     }
     nodes_[id].box = box;
-    if (end - begin <= kLeaf) {
-      nodes_[id].begin = begin;
-      nodes_[id].end = end;
-      return id;
-    }
+    nodes_[id].begin = begin;
+    nodes_[id].end = end;
+    if (end - begin <= kLeaf) return id;
     int axis = 0;
     for (int i = 1; i < 3; ++i)
       if (centers.hi[i] - centers.lo[i] > centers.hi[axis] - centers.lo[axis]) axis = i;

@@ -12,6 +12,7 @@
 //                           the skin follows the flesh (written per output step, io/surface.hpp)
 #pragma once
 
+#include <sinew/discretization/aabb_tree.hpp>
 #include <sinew/discretization/mesh.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 
@@ -58,8 +59,35 @@ struct Lattice {
 // made of open pieces that abut or overlap, as characters' skins are (outward triangles assumed).
 enum class InsideRule { Parity, Winding };
 Lattice voxelize(const TriangleSurface& s, double h, InsideRule rule = InsideRule::Parity);
-// The generalized winding number of a point with respect to a triangle soup.
+// The generalized winding number of a point with respect to a triangle soup (every triangle's exact
+// solid angle: O(triangles) per point).
 double winding_number(const TriangleSurface& s, const std::array<double, 3>& p);
+
+// The same number in O(log triangles) per point (Barill et al. 2018, "Fast winding numbers for soups
+// and clouds"): the triangles in a bounding-volume hierarchy, and a subtree whose triangles are all
+// farther than beta times their radius from the point counted by the second-order expansion of its
+// solid angle about its area-weighted centroid, from the sums
+//   N = sum of a_i n_i                       (area-weighted normals: the dipole)
+//   T = sum of a_i n_i (x_i - c)^T           (its first moment)
+// as  w = [ N.r / |r|^3 + tr(T) / |r|^3 - 3 r.T r / |r|^5 ] / (4 pi),   r = c - p.
+// Nearer subtrees are descended down to exact triangles. The error falls as the expansion's third-order
+// remainder, beta^-3: on a 5k-triangle human at points 3 mm off its skin 0.042 (beta = 2), 0.016 (3),
+// 0.0054 (4), 0.0010 (6); voxelization thresholds w at 1/2 with the default beta = 3.
+class FastWindingNumber {
+ public:
+  explicit FastWindingNumber(const TriangleSurface& s, double beta = 3.0);
+  double operator()(const std::array<double, 3>& p) const;
+
+ private:
+  struct Far {
+    std::array<double, 3> c{}, N{};
+    double T[3][3] = {};
+    double r2 = 0.0;  // (beta x radius)^2: nearer points descend
+  };
+  const TriangleSurface& s_;
+  geom::AabbTree tree_;
+  std::vector<Far> far_;
+};
 
 // Binds every surface vertex to the kept cell that contains it (or the nearest one, for a vertex in a
 // cell whose centre was outside) by the trilinear weights of the cell's eight nodes.
