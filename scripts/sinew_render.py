@@ -43,6 +43,9 @@ def parse_args(argv):
     p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
     p.add_argument("--skin", action="store_true",
                    help="draw the skin a voxelized mesh carries (skin_NNNNNN.obj) in flesh colour instead of the mesh")
+    p.add_argument("--lbs", action="store_true",
+                   help="with a rig: beside each simulated skin, the file's own linear-blend skin of the same step "
+                        "(lbs_NNNNNN.obj; implies --skin)")
     p.add_argument("--cut", default=None, choices=["x", "y", "z"],
                    help="cut the body in half by the plane through the middle of the run across this axis and show "
                         "the far half's cut face (inside a crease: where flesh presses on flesh)")
@@ -154,6 +157,12 @@ def main(argv):
         panels += [(xdmf, st, ld, name if len(a.results) > 1 else f"step {st}, load {ld:.3g}") for st, ld, _ in chosen]
         shown += chosen
         all_steps += steps
+    if a.lbs:  # each panel twice: the simulated skin, then the plain linear-blend skin of the same step
+        a.skin = True
+        panels = [(x, st, ld, f"{name}{': ' if name else ''}{kind}", prefix)
+                  for x, st, ld, name in panels for kind, prefix in (("simulated", "skin"), ("linear-blend", "lbs"))]
+    else:
+        panels = [(x, st, ld, name, "skin") for x, st, ld, name in panels]
     lo, hi = bounds_of_run(all_steps)
     data_lo, data_hi = lo.copy(), hi.copy()  # in the data's own axes (for --cut)
     # A y-up body is turned by +90 degrees about x, (x, y, z) -> (x, -z, y), so that it stands on the
@@ -173,7 +182,7 @@ def main(argv):
     from paraview import simple as pv  # after the argument checks: importing ParaView takes seconds
 
     readers = {}
-    for xdmf, _, _, _ in panels:
+    for xdmf, _, _, _, _ in panels:
         if xdmf not in readers:
             readers[xdmf] = pv.OpenDataFile(xdmf)
             if readers[xdmf] is None:
@@ -195,19 +204,21 @@ def main(argv):
     if a.field == "displacement":
         lut.VectorMode = "Magnitude"
     n = len(panels)
-    for i, (xdmf, step, load, name) in enumerate(panels):
+    for i, (xdmf, step, load, name, prefix) in enumerate(panels):
         reader = readers[xdmf]
         shift = [i * (extent[0] + gap), 0.0, 0.0]
         if a.skin:  # the carried input surface of this step, as a renderer would show it
-            obj = os.path.join(os.path.dirname(xdmf), f"skin_{step:06d}.obj")
+            obj = os.path.join(os.path.dirname(xdmf), f"{prefix}_{step:06d}.obj")
             if not os.path.exists(obj):
-                fail(f"no {obj}: --skin needs a voxelized run (Mesh/Type voxelize) with 'Surface OBJ' on")
+                fail(f"no {obj}: --skin needs a voxelized run (Mesh/Type voxelize or rig) with 'Surface OBJ' on"
+                     + (", --lbs a rig whose Skeleton and Mesh name the same file" if prefix == "lbs" else ""))
             moved = pv.Transform(Input=pv.OpenDataFile(obj))
             moved.Transform.Rotate = rotate
             moved.Transform.Translate = shift
             d = pv.Show(moved, view)
             d.ColorArrayName = [None, ""]
-            d.AmbientColor = d.DiffuseColor = [0.87, 0.66, 0.56]
+            # Flesh colour for the simulation, a grey-blue for the plain skinning it is compared with.
+            d.AmbientColor = d.DiffuseColor = [0.87, 0.66, 0.56] if prefix == "skin" else [0.62, 0.68, 0.78]
             d.Specular = 0.15
         else:
             at = pv.ForceTime(Input=reader, ForcedTime=load, IgnorePipelineTime=1)

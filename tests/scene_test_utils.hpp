@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <sstream>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -33,6 +35,38 @@ inline double max_diff(const std::vector<double>& a, const std::vector<double>& 
 // max |a - b| / max |a|
 inline double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
   return max_diff(a, b) / std::max(max_abs(a), 1e-300);
+}
+
+// A Wavefront OBJ as Sinew writes it (v, vn, f with v//vn).
+struct Obj {
+  std::vector<std::array<double, 3>> v, vn;
+  std::vector<std::array<int, 3>> f;  // 0-based
+};
+
+inline Obj read_obj(const std::string& path) {
+  Obj o;
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream ss(line);
+    std::string kind;
+    ss >> kind;
+    if (kind == "v" || kind == "vn") {
+      std::array<double, 3> p;
+      ss >> p[0] >> p[1] >> p[2];
+      (kind == "v" ? o.v : o.vn).push_back(p);
+    } else if (kind == "f") {
+      std::array<int, 3> t;
+      for (int a = 0; a < 3; ++a) {
+        std::string item;
+        ss >> item;
+        t[a] = std::stoi(item.substr(0, item.find('/'))) - 1;
+        EXPECT_EQ(item, std::to_string(t[a] + 1) + "//" + std::to_string(t[a] + 1));
+      }
+      o.f.push_back(t);
+    }
+  }
+  return o;
 }
 
 // A scene from XML text, its output sent to `out`.

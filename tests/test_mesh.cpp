@@ -524,37 +524,6 @@ TEST(Skeleton, AMotionFileIsInterpolatedBetweenItsFrames) {
 
 namespace {
 
-struct Obj {
-  std::vector<std::array<double, 3>> v, vn;
-  std::vector<std::array<int, 3>> f;  // 0-based
-};
-
-Obj read_obj(const std::string& path) {
-  Obj o;
-  std::ifstream in(path);
-  EXPECT_TRUE(in.good()) << path;
-  for (std::string line; std::getline(in, line);) {
-    std::istringstream ss(line);
-    std::string kind;
-    ss >> kind;
-    if (kind == "v" || kind == "vn") {
-      std::array<double, 3> p;
-      ss >> p[0] >> p[1] >> p[2];
-      (kind == "v" ? o.v : o.vn).push_back(p);
-    } else if (kind == "f") {
-      std::array<int, 3> t;
-      for (int a = 0; a < 3; ++a) {
-        std::string item;
-        ss >> item;
-        t[a] = std::stoi(item.substr(0, item.find('/'))) - 1;
-        EXPECT_EQ(item, std::to_string(t[a] + 1) + "//" + std::to_string(t[a] + 1));
-      }
-      o.f.push_back(t);
-    }
-  }
-  return o;
-}
-
 // Closed and consistently oriented: every directed edge once, and its reverse once. Returns the
 // enclosed volume (divergence theorem), positive when the triangles face outward.
 double check_closed(const Obj& o, const std::string& what) {

@@ -441,3 +441,42 @@ TEST(RigScene, ARestTimeVoxelizesTheSkinAndStartsTheBonesInThatPose) {
   std::printf("[ info ] rest at 0.8 s: lattice box off the posed skin's by %.3f, the bind pose's by %.3f; bones at load 0 off rest by %.1e\n",
               off_posed, off_bind, still);
 }
+
+TEST(RigScene, TheFilesOwnSkinIsWrittenBesideTheSimulatedOne) {
+  // lbs_NNNNNN.obj: the file's linear-blend skin at the clip's time of each step, with the topology of
+  // the simulated skin_NNNNNN.obj (an artist loads either as a cache of the same mesh).
+  const std::string out = "test_results/rig/lbs";
+  const std::string xml = rig_scene("rig_lbs", 0.04, R"x(<Parameter name="Rest time" type="double" value="0.8"/>
+    <Parameter name="Clip start" type="double" value="0.8"/>
+    <Parameter name="Clip end" type="double" value="0.9"/>)x",
+                                     R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="2"/></ParameterList>
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
+  std::filesystem::remove_all(out);
+  Simulation sim(test::config(xml, out), RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const RigFile rig = read_rig_file(kEpileptic);
+  for (int step : {0, 1, 2}) {
+    const std::string n = "_00000" + std::to_string(step) + ".obj";
+    const test::Obj lbs = test::read_obj(out + "/lbs" + n), skin = test::read_obj(out + "/skin" + n);
+    ASSERT_EQ(lbs.v.size(), skin.v.size());
+    EXPECT_EQ(lbs.f, skin.f) << "step " << step;
+    // The file's own skinning at 0.8 + 0.05 step seconds (written with 10 digits).
+    const TriangleSurface expected = rig_surface(rig, "", &rig.clips[0], 0.8 + 0.05 * step);
+    ASSERT_EQ(expected.vertices.size(), lbs.v.size());
+    double err = 0.0, apart = 0.0;
+    for (std::size_t v = 0; v < lbs.v.size(); ++v)
+      for (int d = 0; d < 3; ++d) {
+        err = std::max(err, std::fabs(lbs.v[v][d] - expected.vertices[v][d]));
+        apart += std::fabs(lbs.v[v][d] - skin.v[v][d]) / (3.0 * lbs.v.size());
+      }
+    EXPECT_LT(err, 1e-8) << "step " << step;
+    // At rest both are the skin as voxelized; later the simulated flesh departs from the plain skinning
+    // but stays near it (the bones drive both), here within 1 cm on average.
+    if (step == 0) EXPECT_LT(apart, 1e-9);
+    if (step == 2) {
+      EXPECT_GT(apart, 1e-4);
+      EXPECT_LT(apart, 0.01);
+    }
+    std::printf("[ info ] step %d: lbs vs the file's skinning %.1e; simulated skin vs lbs %.2e m on average per coordinate\n", step, err, apart);
+  }
+}

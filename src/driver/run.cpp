@@ -2,6 +2,7 @@
 // half on failure; progress lines, the log, step files and checkpoints follow every converged step.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/exit_codes.hpp>
+#include <sinew/discretization/rig_file.hpp>
 #include <sinew/driver/dynamics.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
@@ -76,6 +77,17 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   if (scene_->dynamic()) output.every *= scene_->time().substeps;  // Output/Every counts frames
   out_ = std::make_unique<Output>(output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
   out_->set_physics(physics);
+  // A rigged character: the file's own linear-blend skin (the same meshes, so the topology of
+  // skin_*.obj) posed at the clip's time of each written step, beside the simulated skin.
+  const Skeleton& skeleton = scene_->skeleton();
+  if (p.mesh.type == "rig" && skeleton.rig() && p.mesh.rig == p.skeleton.rig)
+    out_->add_surface_sequence("lbs", [&skeleton, meshes = p.mesh.rig_meshes](double load, std::vector<double>& x,
+                                                                              std::vector<std::array<int, 3>>& triangles) {
+      const TriangleSurface s = rig_surface(*skeleton.rig(), meshes, skeleton.clip(), skeleton.clip_time(load));
+      x.clear();
+      for (const auto& v : s.vertices) x.insert(x.end(), v.begin(), v.end());
+      triangles = s.triangles;
+    });
   talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.
   auto comm_copy = comm_;

@@ -358,6 +358,17 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
       path << dir_ << "/skin_" << std::setw(6) << std::setfill('0') << step << ".obj";
       skin_->write_obj(path.str(), u, what.str());
     }
+    for (const auto& [prefix, at] : sequences_) {
+      std::ostringstream path;
+      path << dir_ << "/" << prefix << "_" << std::setw(6) << std::setfill('0') << step << ".obj";
+      collectively(raw_comm(*sys_.comm()), [&] {
+        if (!root_) return;
+        std::vector<double> x;
+        std::vector<std::array<int, 3>> triangles;
+        at(load, x, triangles);
+        write_obj_file(path.str(), x, triangles, what.str());
+      });
+    }
   }
   if (!params_.hdf5) return;
   const Mesh& m = sys_.mesh();

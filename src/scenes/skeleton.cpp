@@ -173,8 +173,10 @@ Mat3 nearest_rotation(const Mat3& A) {
 
 void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm,
                               const std::string& where) {
-  RigFile rig;
-  collectively(raw_comm(comm), [&] { rig = read_rig_file(p.rig); });
+  auto file = std::make_shared<RigFile>();
+  collectively(raw_comm(comm), [&] { *file = read_rig_file(p.rig); });
+  rig_ = file;
+  const RigFile& rig = *file;
   const RigClip* clip = nullptr;
   for (const auto& c : rig.clips)
     if (p.clip.empty() || c.name == p.clip) {
@@ -189,6 +191,9 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   }
   const double t0 = p.clip_start, t1 = p.clip_end >= 0.0 ? p.clip_end : clip->duration;
   if (!(t1 > t0)) throw InputError(where + ": 'Clip start' " + std::to_string(t0) + " is not before the clip's end " + std::to_string(t1));
+  clip_ = clip;
+  clip_t0_ = t0;
+  clip_t1_ = t1;
   // Each joint's capsule at rest: from its origin to its first child joint's (a point for a leaf).
   const RigClip* rest_clip = p.rest_time >= 0.0 ? clip : nullptr;  // the rest pose: a clip frame or the bind pose
   const std::vector<Affine> rest = rig.pose(rest_clip, p.rest_time);

@@ -12,6 +12,8 @@
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
 //   DIR/skin_NNNNNN.obj    a voxelized mesh's input surface carried along by the lattice
+//   DIR/lbs_NNNNNN.obj     a rigged character's skin posed by the file's own linear-blend skinning,
+//                          the same topology as skin_*.obj, for comparison (add_surface_sequence)
 //   DIR/log.csv            one row per converged load step
 //   DIR/newton.csv         one row per Newton iteration (residual, CG iterations, step length)
 //   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
@@ -22,8 +24,10 @@
 #include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
 
+#include <array>
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -102,6 +106,10 @@ class Output {
   void write_step(int step, double load, const Vector& u, const NodeFields& node_fields = {});
   // Path of the surface OBJ of a step.
   std::string surface_file(int step) const;
+  // Another surface written with the boundary surface (same steps) as DIR/<prefix>_NNNNNN.obj: `at`
+  // gives its vertices (3 coordinates each) and triangles at a load fraction; rank 0 calls it.
+  using SurfaceAt = std::function<void(double load, std::vector<double>& x, std::vector<std::array<int, 3>>& triangles)>;
+  void add_surface_sequence(const std::string& prefix, SurfaceAt at) { sequences_.emplace_back(prefix, std::move(at)); }
   // Collective: rank 0 appends a row to log.csv; a failed write is an error on every rank.
   void log(const StepRecord& r);
   // Rank 0 appends a row to newton.csv (`load`: the load fraction being solved for).
@@ -153,6 +161,7 @@ class Output {
   std::vector<std::pair<std::string, int>> node_fields_;  // extra node fields of the step files: name, components
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
+  std::vector<std::pair<std::string, SurfaceAt>> sequences_;
   std::ofstream log_, newton_log_;
 };
 

@@ -30,6 +30,9 @@
 
 namespace sinew {
 
+struct RigFile;
+struct RigClip;
+
 struct KeyframeParameters {
   double time = 0.0, angle = 0.0;
   std::array<double, 3> axis{}, translation{};
@@ -141,6 +144,11 @@ class Skeleton {
   // The skinning guess's weights of an owned node: (bone, weight), summing to 1.
   const std::vector<std::pair<int, double>>& weights(std::size_t owned_node) const { return weights_.at(owned_node); }
   double nonrigid() const { return nonrigid_; }
+  // A skeleton from a rig: the file, its clip and the clip's time at a load fraction (nullptr for other
+  // skeletons). The plain linear-blend skin of the file is written from them beside the simulated one.
+  const RigFile* rig() const { return rig_.get(); }
+  const RigClip* clip() const { return clip_; }
+  double clip_time(double load) const { return clip_t0_ + (clip_t1_ - clip_t0_) * load; }
 
  private:
   void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
@@ -160,6 +168,9 @@ class Skeleton {
   std::vector<std::vector<std::pair<int, double>>> rig_weights_;  // per owned node, from the file's skin
   double nonrigid_ = 0.0;
   std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
+  std::shared_ptr<const RigFile> rig_;
+  const RigClip* clip_ = nullptr;  // in *rig_
+  double clip_t0_ = 0.0, clip_t1_ = 0.0;
 };
 
 template <class Context>
