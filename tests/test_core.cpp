@@ -274,7 +274,7 @@ TEST(HessianPolicy, EveryTransition) {
   never.start(100.0);
   EXPECT_FALSE(never.next_jacobian(1e-9, 0.0));  // 0 disables the exact Hessian
 
-  // Inverted points: per point (the default) and exact go exact while some are inverted, whole mesh
+  // Inverted points: exact (the solver's default) and per point go exact while some are inverted, whole mesh
   // does not; only exact gives them their exact Hessian.
   for (auto [inv, exact_when_tangled, at_inverted] :
        {std::tuple{HessianPolicy::Inverted::PerPoint, true, false}, std::tuple{HessianPolicy::Inverted::Exact, true, true},
@@ -307,11 +307,19 @@ TEST(HessianPolicy, EveryTransition) {
   EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
   p.step_taken(0.25);  // a short step: Exact -> FellBack
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
-  EXPECT_FALSE(p.next_jacobian(1e-6, 0.0));  // for the rest of the solve
+  EXPECT_FALSE(p.next_jacobian(0.06, 0.0));  // until the residual is ten times below the failure's (0.5)
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
   EXPECT_TRUE(p.retry_projected());
+  EXPECT_TRUE(p.next_jacobian(0.04, 0.0));  // FellBack -> Exact
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
+  EXPECT_TRUE(p.fell_back());  // remembered for the solve's report
+  p.line_search_failed();  // failing again: ten times below this failure (0.004) before the next try
+  EXPECT_FALSE(p.next_jacobian(0.005, 0.0));
+  EXPECT_TRUE(p.next_jacobian(0.003, 0.0));
 
   p.start(100.0);  // a new solve starts over
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_FALSE(p.fell_back());
   EXPECT_FALSE(p.retry_projected());
   EXPECT_TRUE(p.next_jacobian(0.1, 0.0));
   p.direction_not_descent();  // Exact -> FellBack
