@@ -190,6 +190,68 @@ TEST(RigFile, BrokenFilesAreNamed) {
   EXPECT_NE(nan.find("clip 'bend', node 'child': rotation key 1 is not a rotation"), std::string::npos) << nan;
 }
 
+TEST(RigFile, AMotionCaptureIsRetargetedByJointNames) {
+  // A BVH written here, ten times the rig's size and with other joint names: 'hip' slides 2 along x and
+  // 'knee' turns 90 degrees about z over 1 s. Carried onto the glTF rig (root, child, tip) by
+  // "hip:root, knee:child" from the rig's pose at 0.5 s of its own clip (the child already turned 45
+  // degrees): the child turns in the world by the knee's turn on top of its reference, the root slides
+  // by the knee's slide times the ratio of heights (1/10), and the unmapped tip follows its parent.
+  const std::string bvh = write_file("slide_bend.bvh", R"(HIERARCHY
+ROOT hip
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT knee
+  {
+    OFFSET 10 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 10 0 0
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 1.0
+0 0 0 0 0 0 0 0 0
+2 0 0 0 0 0 90 0 0
+)");
+  const RigFile source = read_rig_file(bvh), rig = read_rig_file(write_file("bend_target.gltf", two_joint_gltf(90.0)));
+  ASSERT_EQ(source.clips.size(), 1u);
+  EXPECT_NEAR(source.clips[0].duration, 1.0, 1e-9);
+  const std::vector<Affine> reference = rig.pose(&rig.clips[0], 0.5);
+  const Retarget retarget(rig, reference, source, source.clips[0], 0.0, Retarget::parse_map(" hip : root,knee:child "), 0.0);
+  EXPECT_NEAR(retarget.scale(), 0.1, 1e-12);
+  const int root = rig.node_index("root"), child = rig.node_index("child"), tip = rig.node_index("tip");
+  for (double t : {0.0, 0.5, 1.0}) {
+    const std::vector<Affine> W = retarget.pose(t);
+    const double deg = 45.0 + 90.0 * t, r = deg * M_PI / 180.0, slide = 0.2 * t;
+    EXPECT_LT(distance(W[root], turn_z(0.0, {slide, 0, 0})), 1e-6) << "root at t = " << t;
+    EXPECT_LT(distance(W[child], turn_z(deg, {slide + 1, 0, 0})), 1e-6) << "child at t = " << t;
+    EXPECT_LT(distance(W[tip], turn_z(deg, {slide + 1 + std::cos(r), std::sin(r), 0})), 1e-6) << "tip at t = " << t;
+  }
+  // At the source's reference time the rig stands exactly in its reference pose.
+  const std::vector<Affine> W0 = retarget.pose(0.0);
+  for (std::size_t n = 0; n < rig.nodes.size(); ++n) EXPECT_LT(distance(W0[n], reference[n]), 1e-12) << rig.nodes[n].name;
+  // A given scale replaces the ratio of heights.
+  EXPECT_LT(distance(Retarget(rig, reference, source, source.clips[0], 0.0, {{"hip", "root"}}, 0.5).pose(1.0)[root], turn_z(0.0, {1.0, 0, 0})), 1e-6);
+  // Names the files do not have, a joint mapped twice, a malformed pair: named.
+  auto message = [&](const std::string& map) {
+    try {
+      Retarget(rig, reference, source, source.clips[0], 0.0, Retarget::parse_map(map), 0.0);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(message("Hips:root").find("has no joint 'Hips' (it has 'hip'"), std::string::npos) << message("Hips:root");
+  EXPECT_NE(message("hip:Root").find("has no joint 'Root' (it has"), std::string::npos) << message("hip:Root");
+  EXPECT_NE(message("hip:root, knee:root").find("the rig's joint 'root' is mapped twice"), std::string::npos);
+  EXPECT_NE(message("hip root").find("'hip root' is not 'source joint:rig joint'"), std::string::npos) << message("hip root");
+  EXPECT_NE(message(" , ").find("maps no joint"), std::string::npos);
+}
+
 TEST(RigFile, TheFastWindingNumberAgreesWithTheExactSumOnAnOpenSkin) {
   // BCN's skin (three open pieces, 46 open edges): the hierarchical winding number against the sum of
   // every triangle's solid angle at the centres of a 4 cm lattice around the body and at points 3 mm
@@ -278,6 +340,36 @@ Mat3 polar(const Mat3& A) {
 }
 
 
+// After a run: how far the bone nodes are from where their joints' motion from `rest` to `posed`
+// puts them, that motion recomputed here (world posed after world at rest inverted, its rotation part
+// by the polar decomposition, about the joint's origin); `moved`: the largest bone displacement.
+double bone_error(Simulation& sim, const RigFile& rig, const std::vector<Affine>& rest, const std::vector<Affine>& posed,
+                  double& moved) {
+  const Mesh& mesh = sim.scene().system().mesh();
+  const Skeleton& skeleton = sim.scene().skeleton();
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto u = sim.displacement().getLocalViewHost(Tpetra::Access::ReadOnly);
+  double err = 0.0;
+  moved = 0.0;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) {
+    const int j = rig.node_index(skeleton.name(b));
+    // D = posed[j] o rest[j]^-1: D.A = posed.A rest.A^-1, D(x) = posed(rest^-1(x)); rest transforms of
+    // this file are rotations (checked by AProductionCharacterIsReadWithItsJointsWeightsAndClip).
+    const Mat3 R = polar(posed[j].A * transpose(rest[j].A));
+    const auto origin = rest[j].t, c = posed[j].t;  // the joint's origin, at rest and posed
+    for (int n : skeleton.nodes(b)) {
+      if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
+      for (int i = 0; i < 3; ++i) {
+        double y = c[i];
+        for (int k = 0; k < 3; ++k) y += R(i, k) * (X(n, k) - origin[k]);
+        err = std::max(err, std::fabs(X(n, i) + u(3 * n + i, 0) - y));
+        moved = std::max(moved, std::fabs(u(3 * n + i, 0)));
+      }
+    }
+  }
+  return err;
+}
+
 }  // namespace
 
 TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
@@ -338,28 +430,8 @@ TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
   // recomputed here (world at 0.1 s after world at rest inverted, its rotation part by the polar
   // decomposition, about the joint's origin).
   ASSERT_EQ(sim.run(), 0);
-  const auto posed = rig.pose(&rig.clips[0], 0.1);
-  auto u = sim.displacement().getLocalViewHost(Tpetra::Access::ReadOnly);
-  double err = 0.0, moved = 0.0;
-  for (std::size_t b = 0; b < skeleton.size(); ++b) {
-    const int j = rig.node_index(skeleton.name(b));
-    // D = posed[j] o rest[j]^-1: D.A = posed.A rest.A^-1, D(x) = posed(rest^-1(x)).
-    const Mat3 Ri = transpose(rest[j].A);  // rest transforms of this file are rotations (checked above)
-    const Mat3 R = polar(posed[j].A * Ri);
-    const auto origin = rest[j].t;
-    std::array<double, 3> local{}, c{};
-    for (int i = 0; i < 3; ++i) local[i] = 0.0;  // the joint's origin in its own frame is 0
-    c = posed[j].apply(local);
-    for (int n : skeleton.nodes(b)) {
-      if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
-      for (int i = 0; i < 3; ++i) {
-        double y = c[i];
-        for (int k = 0; k < 3; ++k) y += R(i, k) * (X(n, k) - origin[k]);
-        err = std::max(err, std::fabs(X(n, i) + u(3 * n + i, 0) - y));
-        moved = std::max(moved, std::fabs(u(3 * n + i, 0)));
-      }
-    }
-  }
+  double moved = 0.0;
+  const double err = bone_error(sim, rig, rest, rig.pose(&rig.clips[0], 0.1), moved);
   EXPECT_LT(err, 1e-9);
   EXPECT_GT(moved, 1e-3);
   std::printf("[ info ] rig: %lld cells (lattice %.4f m^3, skin %.4f), %zu bones (%d joints hold no node), non-rigidity %.1e; "
@@ -451,9 +523,8 @@ TEST(RigScene, TheFilesOwnSkinIsWrittenBesideTheSimulatedOne) {
     <Parameter name="Clip end" type="double" value="0.9"/>)x",
                                      R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="2"/></ParameterList>
   <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
-  std::filesystem::remove_all(out);
   Simulation sim(test::config(xml, out), RunOptions{true, ""});
-  ASSERT_EQ(sim.run(), 0);
+  ASSERT_EQ(sim.run(), 0);  // (every file below rewritten by this run)
   const RigFile rig = read_rig_file(kEpileptic);
   for (int step : {0, 1, 2}) {
     const std::string n = "_00000" + std::to_string(step) + ".obj";
@@ -472,11 +543,50 @@ TEST(RigScene, TheFilesOwnSkinIsWrittenBesideTheSimulatedOne) {
     EXPECT_LT(err, 1e-8) << "step " << step;
     // At rest both are the skin as voxelized; later the simulated flesh departs from the plain skinning
     // but stays near it (the bones drive both), here within 1 cm on average.
-    if (step == 0) EXPECT_LT(apart, 1e-9);
+    if (step == 0) {
+      EXPECT_LT(apart, 1e-9);
+    }
     if (step == 2) {
       EXPECT_GT(apart, 1e-4);
       EXPECT_LT(apart, 0.01);
     }
     std::printf("[ info ] step %d: lbs vs the file's skinning %.1e; simulated skin vs lbs %.2e m on average per coordinate\n", step, err, apart);
   }
+}
+
+TEST(RigScene, AMotionCaptureDrivesTheRigThroughTheJointMap) {
+  // CMU's BVH capture (another skeleton: other names, 14x the size, a T-pose rest) carried onto BCN's
+  // joints, from the capture's pose at 1.0 s (where BCN stands in its rest pose, its clip at 0.8 s) to
+  // 1.1 s: every bone node ends where its joint's retargeted motion puts it.
+  const char* bvh = "/usr/share/assimp/models/BVH/01_01.bvh";
+  const std::string map = "Hips:B_Root_Pelvis_L, LeftUpLeg:B_Hip_Left, LeftLeg:B_Knee_Left, RightUpLeg:B_Hip_Right, "
+                          "RightLeg:B_Knee_Right, Spine:B_Spine2, LeftArm:B_UpperArm_Left, LeftForeArm:B_ForeArm_Left";
+  const std::string xml = rig_scene("rig_mocap", 0.04, R"x(<Parameter name="Rest time" type="double" value="0.8"/>
+    <Parameter name="Retarget from" type="string" value=")x" + std::string(bvh) + R"x("/>
+    <Parameter name="Joint map" type="string" value=")x" + map + R"x("/>
+    <Parameter name="Clip start" type="double" value="1.0"/>
+    <Parameter name="Clip end" type="double" value="1.1"/>)x",
+                                     R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
+  <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-4"/></ParameterList>
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
+  Simulation sim(test::config(xml, "test_results/rig/mocap"), RunOptions{true, ""});
+  const RigFile rig = read_rig_file(kEpileptic), source = read_rig_file(bvh);
+  const std::vector<Affine> rest = rig.pose(&rig.clips[0], 0.8);
+  const Retarget retarget(rig, rest, source, source.clips[0], 1.0, Retarget::parse_map(map), 0.0);
+  EXPECT_NEAR(retarget.scale(), sim.scene().skeleton().retarget_scale(), 1e-15);
+  EXPECT_GT(retarget.scale(), 0.05);  // BCN is about 1.8 m tall, the capture's skeleton about 14 times that
+  EXPECT_LT(retarget.scale(), 0.1);
+  ASSERT_EQ(sim.run(), 0);
+  double moved = 0.0;
+  const double err = bone_error(sim, rig, rest, retarget.pose(1.1), moved);
+  EXPECT_LT(err, 1e-9);
+  EXPECT_GT(moved, 1e-3);
+  // An unmapped joint (the right hand) moves rigidly with its mapped ancestor (the right knee's chain is
+  // mapped, the right arm is not: it follows the spine).
+  const auto W = retarget.pose(1.1);
+  const int spine = rig.node_index("B_Spine2"), hand = rig.node_index("B_Hand_Right");
+  const Affine relative_rest = rest[spine].inverse().after(rest[hand]), relative = W[spine].inverse().after(W[hand]);
+  EXPECT_LT(distance(relative, relative_rest), 1e-9);
+  std::printf("[ info ] retargeted capture: scale %.4f; bone nodes vs the retargeted joints' motion %.1e (moved up to %.3f)\n",
+              retarget.scale(), err, moved);
 }

@@ -1,6 +1,7 @@
 // Rigged characters read with Assimp, posed and skinned (rig_file.hpp). The only translation unit
 // that includes Assimp's headers.
 #include <sinew/core/errors.hpp>
+#include <sinew/core/rigid.hpp>
 #include <sinew/discretization/rig_file.hpp>
 
 #include <assimp/Importer.hpp>
@@ -120,8 +121,11 @@ std::vector<Affine> RigFile::pose(const RigClip* clip, double seconds) const {
 Affine RigFile::world(int node, const RigClip* clip, double seconds) const { return pose(clip, seconds).at(node); }
 
 std::vector<std::array<double, 3>> RigFile::skin(int mesh, const RigClip* clip, double seconds) const {
+  return skin(mesh, pose(clip, seconds));
+}
+
+std::vector<std::array<double, 3>> RigFile::skin(int mesh, const std::vector<Affine>& W) const {
   const RigMesh& m = meshes.at(mesh);
-  const std::vector<Affine> W = pose(clip, seconds);
   std::vector<std::array<double, 3>> x(m.vertices.size(), {0.0, 0.0, 0.0});
   if (m.bones.empty()) {
     for (std::size_t v = 0; v < x.size(); ++v) x[v] = W[m.node].apply(m.vertices[v]);
@@ -276,7 +280,9 @@ const RigClip* RigFile::clip(const std::string& name) const {
   return nullptr;
 }
 
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {
+namespace {
+
+std::vector<int> chosen_meshes(const RigFile& rig, const std::string& meshes) {
   std::vector<int> chosen;
   std::stringstream list(meshes);
   for (std::string name; std::getline(list, name, ',');) {
@@ -295,24 +301,135 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const
   }
   if (chosen.empty())
     for (std::size_t m = 0; m < rig.meshes.size(); ++m) chosen.push_back(static_cast<int>(m));
+  return chosen;
+}
+
+}  // namespace
+
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world, bool flip) {
   TriangleSurface s;
   s.path = rig.path;
-  for (int m : chosen) {
+  for (int m : chosen_meshes(rig, meshes)) {
     const int base = static_cast<int>(s.vertices.size());
-    const auto x = rig.skin(m, clip, seconds);
+    const auto x = rig.skin(m, world);
     s.vertices.insert(s.vertices.end(), x.begin(), x.end());
     for (const auto& t : rig.meshes[m].triangles) s.triangles.push_back({base + t[0], base + t[1], base + t[2]});
   }
   if (s.triangles.empty()) bad(rig.path, "the chosen meshes have no triangles");
+  if (flip)
+    for (auto& T : s.triangles) std::swap(T[1], T[2]);
+  s.set_bounds();
+  return s;
+}
+
+bool rig_surface_flipped(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world) {
+  const TriangleSurface s = rig_surface(rig, meshes, world, false);
   double volume = 0.0;
   for (const auto& T : s.triangles) {
     const auto &a = s.vertices[T[0]], &b = s.vertices[T[1]], &c = s.vertices[T[2]];
     volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
-  if (volume < 0.0)
-    for (auto& T : s.triangles) std::swap(T[1], T[2]);
-  s.set_bounds();
-  return s;
+  return volume < 0.0;
+}
+
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {
+  // Turned outward as a whole when the soup's signed volume is negative.
+  const std::vector<Affine> world = rig.pose(clip, seconds);
+  return rig_surface(rig, meshes, world, rig_surface_flipped(rig, meshes, world));
+}
+
+std::vector<std::pair<std::string, std::string>> Retarget::parse_map(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> map;
+  std::stringstream list(text);
+  auto trim = [](std::string v) {
+    v.erase(0, v.find_first_not_of(" \t\n"));
+    v.erase(v.find_last_not_of(" \t\n") + 1);
+    return v;
+  };
+  for (std::string pair; std::getline(list, pair, ',');) {
+    if (trim(pair).empty()) continue;
+    const auto colon = pair.find(':');
+    const std::string from = trim(pair.substr(0, colon)), to = colon == std::string::npos ? "" : trim(pair.substr(colon + 1));
+    if (colon == std::string::npos || from.empty() || to.empty() || to.find(':') != std::string::npos)
+      throw InputError("'Joint map': '" + trim(pair) + "' is not 'source joint:rig joint'");
+    map.emplace_back(from, to);
+  }
+  return map;
+}
+
+Retarget::Retarget(const RigFile& rig, const std::vector<Affine>& rig_reference, const RigFile& source, const RigClip& clip,
+                   double source_reference, const std::vector<std::pair<std::string, std::string>>& map, double scale)
+    : rig_(rig), source_(source), clip_(clip), reference_(rig_reference) {
+  if (map.empty()) throw InputError("'Joint map' maps no joint");
+  auto listing = [](const RigFile& f) {
+    std::string names;
+    int shown = 0;
+    for (const auto& n : f.nodes) {
+      if (shown == 12) {
+        names += ", ...";
+        break;
+      }
+      names += (names.empty() ? "'" : ", '") + n.name + "'";
+      ++shown;
+    }
+    return names;
+  };
+  from_.assign(rig.nodes.size(), -1);
+  for (const auto& [src, dst] : map) {
+    const int s = source.node_index(src), d = rig.node_index(dst);
+    if (s < 0) throw InputError("'Joint map': " + source.path + " has no joint '" + src + "' (it has " + listing(source) + ")");
+    if (d < 0) throw InputError("'Joint map': " + rig.path + " has no joint '" + dst + "' (it has " + listing(rig) + ")");
+    if (from_[d] >= 0) throw InputError("'Joint map': the rig's joint '" + dst + "' is mapped twice");
+    from_[d] = s;
+  }
+  local_.resize(rig.nodes.size());
+  top_.assign(rig.nodes.size(), 0);
+  std::vector<char> mapped_above(rig.nodes.size(), 0);
+  for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
+    const int parent = rig.nodes[n].parent;
+    local_[n] = parent < 0 ? reference_[n] : reference_[parent].inverse().after(reference_[n]);
+    const char above = parent >= 0 && (mapped_above[parent] || from_[parent] >= 0);
+    mapped_above[n] = above;
+    top_[n] = from_[n] >= 0 && !above;
+  }
+  source_reference_ = source.pose(&clip, source_reference);
+  if (scale > 0.0) {
+    scale_ = scale;
+    return;
+  }
+  // The ratio of heights: the largest extent of the mapped joints' reference positions in each.
+  double lo[2][3], hi[2][3];
+  for (auto* b : {lo[0], lo[1]}) std::fill(b, b + 3, HUGE_VAL);
+  for (auto* b : {hi[0], hi[1]}) std::fill(b, b + 3, -HUGE_VAL);
+  for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
+    if (from_[n] < 0) continue;
+    for (int i = 0; i < 3; ++i) {
+      lo[0][i] = std::min(lo[0][i], reference_[n].t[i]);
+      hi[0][i] = std::max(hi[0][i], reference_[n].t[i]);
+      lo[1][i] = std::min(lo[1][i], source_reference_[from_[n]].t[i]);
+      hi[1][i] = std::max(hi[1][i], source_reference_[from_[n]].t[i]);
+    }
+  }
+  double extent[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < 3; ++i) extent[k] = std::max(extent[k], hi[k][i] - lo[k][i]);
+  scale_ = extent[1] > 0.0 && extent[0] > 0.0 ? extent[0] / extent[1] : 1.0;
+}
+
+std::vector<Affine> Retarget::pose(double seconds) const {
+  const std::vector<Affine> S = source_.pose(&clip_, seconds);
+  std::vector<Affine> W(rig_.nodes.size());
+  for (std::size_t n = 0; n < rig_.nodes.size(); ++n) {
+    const int parent = rig_.nodes[n].parent;
+    W[n] = parent < 0 ? local_[n] : W[parent].after(local_[n]);
+    const int s = from_[n];
+    if (s < 0) continue;
+    const Mat3 turn = nearest_rotation(S[s].A) * transpose(nearest_rotation(source_reference_[s].A));
+    W[n].A = turn * reference_[n].A;
+    if (top_[n])
+      for (int i = 0; i < 3; ++i) W[n].t[i] = reference_[n].t[i] + scale_ * (S[s].t[i] - source_reference_[s].t[i]);
+  }
+  return W;
 }
 
 std::string describe(const RigFile& rig) {

@@ -24,7 +24,8 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
     if (c.params.skeleton.rest_time >= 0.0) {
       if (c.params.mesh.type != "rig" || c.params.mesh.rig != c.params.skeleton.rig)
         throw InputError("Skeleton: 'Rest time' needs Mesh/Type rig with the same 'Rig' file (the skin is voxelized in that pose)");
-      c.params.mesh.rig_rest_clip = c.params.skeleton.clip;
+      // (Retargeting: the skeleton's clip is the other file's; the rest is a frame of the rig's first.)
+      c.params.mesh.rig_rest_clip = c.params.skeleton.retarget.empty() ? c.params.skeleton.clip : "";
       c.params.mesh.rig_rest_time = c.params.skeleton.rest_time;
     }
   } catch (const InputError& e) {
@@ -45,6 +46,7 @@ SceneConfig read_scene(const std::string& path) {
   resolve(c.params.skeleton.motion_file);
   resolve(c.params.mesh.rig);
   resolve(c.params.skeleton.rig);
+  resolve(c.params.skeleton.retarget);
   for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
   for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
   for (auto& [name, collider] : c.params.contact.colliders) resolve(collider.surface);
@@ -67,8 +69,17 @@ void check_mesh_file(const SceneConfig& c) {
     }
     if (!p.skeleton.rig.empty()) {
       const RigFile rig = read_rig_file(p.skeleton.rig);
-      if (std::none_of(rig.clips.begin(), rig.clips.end(), [&](const RigClip& k) { return p.skeleton.clip.empty() || k.name == p.skeleton.clip; }))
-        throw InputError("Skeleton: " + p.skeleton.rig + " has no clip" + (p.skeleton.clip.empty() ? "" : " '" + p.skeleton.clip + "'"));
+      const RigFile moving = p.skeleton.retarget.empty() ? rig : read_rig_file(p.skeleton.retarget);
+      if (!moving.clip(p.skeleton.clip))
+        throw InputError("Skeleton: " + moving.path + " has no clip" + (p.skeleton.clip.empty() ? "" : " '" + p.skeleton.clip + "'"));
+      if (!p.skeleton.retarget.empty()) {
+        try {
+          const Retarget check(rig, rig.pose(nullptr, 0.0), moving, *moving.clip(p.skeleton.clip), 0.0,
+                               Retarget::parse_map(p.skeleton.joint_map), p.skeleton.retarget_scale);
+        } catch (const InputError& e) {
+          throw e.prefixed("Skeleton: ");
+        }
+      }
     }
     auto surface = [](const RegionParameters& r, const std::string& where) {
       if (r.region != "inside") return;

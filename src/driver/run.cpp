@@ -81,9 +81,10 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   // skin_*.obj) posed at the clip's time of each written step, beside the simulated skin.
   const Skeleton& skeleton = scene_->skeleton();
   if (p.mesh.type == "rig" && skeleton.rig() && p.mesh.rig == p.skeleton.rig)
-    out_->add_surface_sequence("lbs", [&skeleton, meshes = p.mesh.rig_meshes](double load, std::vector<double>& x,
-                                                                              std::vector<std::array<int, 3>>& triangles) {
-      const TriangleSurface s = rig_surface(*skeleton.rig(), meshes, skeleton.clip(), skeleton.clip_time(load));
+    out_->add_surface_sequence("lbs", [&skeleton, meshes = p.mesh.rig_meshes,
+                                       flip = rig_surface_flipped(*skeleton.rig(), p.mesh.rig_meshes, skeleton.rig_pose(0.0))](
+                                          double load, std::vector<double>& x, std::vector<std::array<int, 3>>& triangles) {
+      const TriangleSurface s = rig_surface(*skeleton.rig(), meshes, skeleton.rig_pose(load), flip);
       x.clear();
       for (const auto& v : s.vertices) x.insert(x.end(), v.begin(), v.end());
       triangles = s.triangles;

@@ -152,23 +152,6 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
   return out;
 }
 
-// The rotation nearest to A (the polar factor, by Higham's iteration R <- (R + R^-T) / 2).
-Mat3 nearest_rotation(const Mat3& A) {
-  Mat3 R = A;
-  for (int it = 0; it < 30; ++it) {
-    const Mat3 Rt = (1.0 / det(R)) * cofactor(R);  // R^-T
-    Mat3 next;
-    double change = 0.0;
-    for (int k = 0; k < 9; ++k) {
-      next[k] = 0.5 * (R[k] + Rt[k]);
-      change = std::max(change, std::fabs(next[k] - R[k]));
-    }
-    R = next;
-    if (change < 1e-15) break;
-  }
-  return R;
-}
-
 }  // namespace
 
 void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm,
@@ -177,16 +160,18 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   collectively(raw_comm(comm), [&] { *file = read_rig_file(p.rig); });
   rig_ = file;
   const RigFile& rig = *file;
-  const RigClip* clip = nullptr;
-  for (const auto& c : rig.clips)
-    if (p.clip.empty() || c.name == p.clip) {
-      clip = &c;
-      break;
-    }
+  // The clip: the rig's own, or another file's carried onto the rig's joints ('Retarget from').
+  if (!p.retarget.empty()) {
+    auto source = std::make_shared<RigFile>();
+    collectively(raw_comm(comm), [&] { *source = read_rig_file(p.retarget); });
+    source_ = source;
+  }
+  const RigFile& moving = source_ ? *source_ : rig;
+  const RigClip* clip = moving.clip(p.clip);
   if (!clip) {
     std::string names;
-    for (const auto& c : rig.clips) names += (names.empty() ? "'" : ", '") + c.name + "'";
-    throw InputError(where + ": " + p.rig + (p.clip.empty() ? " has no animation clip" : " has no clip '" + p.clip + "'") +
+    for (const auto& c : moving.clips) names += (names.empty() ? "'" : ", '") + c.name + "'";
+    throw InputError(where + ": " + moving.path + (p.clip.empty() ? " has no animation clip" : " has no clip '" + p.clip + "'") +
                      (names.empty() ? "" : " (it has " + names + ")"));
   }
   const double t0 = p.clip_start, t1 = p.clip_end >= 0.0 ? p.clip_end : clip->duration;
@@ -194,9 +179,20 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   clip_ = clip;
   clip_t0_ = t0;
   clip_t1_ = t1;
-  // Each joint's capsule at rest: from its origin to its first child joint's (a point for a leaf).
-  const RigClip* rest_clip = p.rest_time >= 0.0 ? clip : nullptr;  // the rest pose: a clip frame or the bind pose
+  // The rest pose: a frame of the rig's own clip (when retargeting, its first) or the bind pose.
+  const RigClip* rest_clip = nullptr;
+  if (p.rest_time >= 0.0) {
+    rest_clip = source_ ? rig.clip("") : clip;
+    if (!rest_clip) throw InputError(where + ": 'Rest time' needs a clip in " + p.rig + ", which has none");
+  }
   const std::vector<Affine> rest = rig.pose(rest_clip, p.rest_time);
+  if (source_) {
+    try {
+      retarget_ = std::make_unique<Retarget>(rig, rest, *source_, *clip, t0, Retarget::parse_map(p.joint_map), p.retarget_scale);
+    } catch (const InputError& e) {
+      throw e.prefixed(where + ": ");
+    }
+  }
   std::vector<int> joints;
   std::vector<std::array<double, 3>> a, b;
   for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
@@ -239,7 +235,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   const int F = std::max(1, static_cast<int>(std::ceil((t1 - t0) * p.sample_rate)));
   std::vector<std::vector<Rigid>> frames(joints.size());
   for (int k = 0; k <= F; ++k) {
-    const std::vector<Affine> W = rig.pose(clip, t0 + (t1 - t0) * k / F);
+    const std::vector<Affine> W = retarget_ ? retarget_->pose(t0 + (t1 - t0) * k / F) : rig.pose(clip, t0 + (t1 - t0) * k / F);
     for (std::size_t j = 0; j < joints.size(); ++j) {
       const Affine D = W[joints[j]].after(rest[joints[j]].inverse());
       Rigid T;
@@ -303,6 +299,12 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     for (auto& bw : w) bw.second /= total;
     rig_weights_[n] = std::move(w);
   }
+}
+
+std::vector<Affine> Skeleton::rig_pose(double load) const {
+  if (!rig_) return {};
+  const double seconds = clip_t0_ + (clip_t1_ - clip_t0_) * load;
+  return retarget_ ? retarget_->pose(seconds) : rig_->pose(clip_, seconds);
 }
 
 Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where)

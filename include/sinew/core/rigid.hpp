@@ -3,6 +3,7 @@
 
 #include <sinew/core/small_matrix.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -36,6 +37,23 @@ struct Rigid {
     return i;
   }
 };
+
+// The rotation nearest to A (the polar factor, by Higham's iteration R <- (R + R^-T) / 2).
+inline Mat3 nearest_rotation(const Mat3& A) {
+  Mat3 R = A;
+  for (int it = 0; it < 30; ++it) {
+    const Mat3 Rt = (1.0 / det(R)) * cofactor(R);  // R^-T
+    Mat3 next;
+    double change = 0.0;
+    for (int k = 0; k < 9; ++k) {
+      next[k] = 0.5 * (R[k] + Rt[k]);
+      change = std::max(change, std::fabs(next[k] - R[k]));
+    }
+    R = next;
+    if (change < 1e-15) break;
+  }
+  return R;
+}
 
 // Rotation about a unit axis by an angle (Rodrigues).
 inline Mat3 axis_angle(const std::array<double, 3>& k, double angle) {

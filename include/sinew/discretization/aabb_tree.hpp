@@ -51,8 +51,8 @@ class AabbTree {
       if (bulk(id)) continue;
       if (n.left < 0) {
         for (int k = n.begin; k < n.end; ++k) fn(items_[k]);
-      } else {
-        stack[top++] = n.left;  // depth ~ log2(n) with median splits: far from 128
+      } else if (top + 2 <= 128) {  // always, with median splits (depth ~ log2 n)
+        stack[top++] = n.left;
         stack[top++] = n.right;
       }
     }
@@ -140,23 +140,13 @@ class AabbTree {
     return id;
   }
 
+  // fn(item) for the items whose box satisfies pred, skipping subtrees whose box does not.
   template <class Pred, class Fn>
   void visit(Pred&& pred, Fn&& fn) const {
-    if (nodes_.empty()) return;
-    int stack[128];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (!pred(n.box)) continue;
-      if (n.left < 0) {
-        for (int k = n.begin; k < n.end; ++k)
-          if (pred(boxes_[items_[k]])) fn(items_[k]);
-      } else if (top + 2 <= 128) {
-        stack[top++] = n.left;
-        stack[top++] = n.right;
-      }
-    }
+    descend([&](int node) { return !pred(nodes_[node].box); },
+            [&](int item) {
+              if (pred(boxes_[item])) fn(item);
+            });
   }
 
   std::vector<Box> boxes_;

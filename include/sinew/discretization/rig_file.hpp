@@ -102,6 +102,8 @@ struct RigFile {
   std::vector<Affine> pose(const RigClip* clip, double seconds) const;
   // A mesh's vertices skinned at the pose (a mesh without bones moves with its node).
   std::vector<std::array<double, 3>> skin(int mesh, const RigClip* clip, double seconds) const;
+  // The same from the world transforms of every node (pose()'s, or a retargeted motion's).
+  std::vector<std::array<double, 3>> skin(int mesh, const std::vector<Affine>& world) const;
 };
 
 // Throws InputError (kind File for a file that cannot be opened, BadMesh for one Assimp cannot read or
@@ -114,6 +116,44 @@ RigFile read_rig_file(const std::string& path);
 // pose of `clip` at `seconds` (nullptr: the bind pose); turned outward as a whole when its signed
 // volume is negative. Throws InputError naming a mesh the file does not have (and those it has).
 TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip = nullptr, double seconds = 0.0);
+// The same skinned by given world transforms of every node; `flip`: turn the triangles over (as
+// the rest pose's surface was), so that every pose has the same triangles.
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world, bool flip);
+bool rig_surface_flipped(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world);
+
+// A clip of another skeleton (a BVH motion capture, another character) carried onto this rig's
+// joints through a joint-name map, in world space and relative to a reference pose of each: a mapped
+// joint turns in the world as its source joint turns from the source's reference (its clip at
+// `source_reference` seconds),
+//     R(t) = polar(S(t)) polar(S_ref)^T R_ref                 (S: the source joint's world matrix)
+// so that at the reference time the rig stands in its own reference pose (its rest), whatever the
+// source's pose; unmapped joints keep their reference pose relative to their parent; every joint's
+// position follows from the rig's own bone lengths, except the topmost mapped joints, which move as
+// their source joints move from the reference, times `scale` (<= 0: the ratio of the mapped joints'
+// heights, the largest extent of their reference positions, in the rig and in the source).
+class Retarget {
+ public:
+  // map: (source joint, rig joint) pairs. Throws InputError naming an unknown joint (and listing the
+  // file's), a rig joint mapped twice, or an empty map.
+  Retarget(const RigFile& rig, const std::vector<Affine>& rig_reference, const RigFile& source, const RigClip& clip,
+           double source_reference, const std::vector<std::pair<std::string, std::string>>& map, double scale);
+  // World transforms of every node of the rig at `seconds` of the source's clip.
+  std::vector<Affine> pose(double seconds) const;
+  double scale() const { return scale_; }
+
+  // "src:dst, src:dst, ..." (spaces around names ignored). Throws InputError on a malformed pair.
+  static std::vector<std::pair<std::string, std::string>> parse_map(const std::string& text);
+
+ private:
+  const RigFile& rig_;
+  const RigFile& source_;
+  const RigClip& clip_;
+  std::vector<Affine> reference_, local_;  // the rig's reference world transforms, and local ones
+  std::vector<Affine> source_reference_;   // the source's world transforms at its reference time
+  std::vector<int> from_;                  // per rig node: its source node, or -1
+  std::vector<char> top_;                  // per rig node: mapped, with no mapped ancestor
+  double scale_ = 1.0;
+};
 
 // A listing of the file for a user choosing meshes, joints and clips (sinew-rig).
 std::string describe(const RigFile& rig);

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <sinew/core/rigid.hpp>
+#include <sinew/discretization/rig_file.hpp>
 #include <sinew/scenes/region.hpp>
 
 #include <Teuchos_Comm.hpp>
@@ -29,9 +30,6 @@
 #include <memory>
 
 namespace sinew {
-
-struct RigFile;
-struct RigClip;
 
 struct KeyframeParameters {
   double time = 0.0, angle = 0.0;
@@ -85,9 +83,10 @@ struct BoneParameters {
 
 struct SkeletonParameters {
   NamedSections<BoneParameters> bones;
-  std::string motion_file, rig, clip;
+  std::string motion_file, rig, clip, retarget, joint_map;
   bool skinning = true;
-  double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0, rest_time = -1.0;
+  double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0, rest_time = -1.0,
+         retarget_scale = 0.0;
   bool rig_weights = false;
 
   template <class V>
@@ -98,7 +97,19 @@ struct SkeletonParameters {
             "the lattice nodes within 'Bone radius' of the segment to its first child joint (a node near several "
             "goes to the nearest) and follows the joint's motion in 'Clip' (made rigid by polar decomposition); a "
             "relative path is taken from the scene file's folder");
-    v.entry("Clip", clip, std::string(""), "the rig's animation clip (empty: its first)");
+    v.entry("Clip", clip, std::string(""), "the rig's animation clip (empty: its first); with 'Retarget from', that file's");
+    v.entry("Retarget from", retarget, std::string(""),
+            "a file whose clip drives the Rig's joints instead of the Rig's own (a BVH motion capture, another "
+            "character; see sinew-rig), through 'Joint map': each mapped joint turns in the world as its source "
+            "joint turns from the source's pose at 'Clip start' (where the rig stands in its rest pose); a relative "
+            "path is taken from the scene file's folder");
+    v.entry("Joint map", joint_map, std::string(""),
+            "with 'Retarget from': 'source joint:rig joint' pairs, comma-separated (unmapped rig joints move with "
+            "their parent)");
+    v.entry("Retarget scale", retarget_scale, 0.0,
+            "with 'Retarget from': the factor on the source root's translation (0: the ratio of the mapped joints' "
+            "heights in the rig and in the source)",
+            Range::non_negative());
     v.entry("Clip start", clip_start, 0.0, "the clip's time, in seconds, at load 0", Range::non_negative());
     v.entry("Rest time", rest_time, -1.0,
             "the clip's time whose pose is the rest (stress-free) shape: the skin (Mesh/Type rig, the same file) is "
@@ -144,11 +155,12 @@ class Skeleton {
   // The skinning guess's weights of an owned node: (bone, weight), summing to 1.
   const std::vector<std::pair<int, double>>& weights(std::size_t owned_node) const { return weights_.at(owned_node); }
   double nonrigid() const { return nonrigid_; }
-  // A skeleton from a rig: the file, its clip and the clip's time at a load fraction (nullptr for other
-  // skeletons). The plain linear-blend skin of the file is written from them beside the simulated one.
+  // A skeleton from a rig: the file (nullptr for other skeletons) and the world transforms of its
+  // nodes at a load fraction (its clip, or a retargeted one), from which the plain linear-blend skin
+  // of the file is written beside the simulated one; the retargeting's scale (0 without).
   const RigFile* rig() const { return rig_.get(); }
-  const RigClip* clip() const { return clip_; }
-  double clip_time(double load) const { return clip_t0_ + (clip_t1_ - clip_t0_) * load; }
+  std::vector<Affine> rig_pose(double load) const;
+  double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
 
  private:
   void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
@@ -168,8 +180,9 @@ class Skeleton {
   std::vector<std::vector<std::pair<int, double>>> rig_weights_;  // per owned node, from the file's skin
   double nonrigid_ = 0.0;
   std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
-  std::shared_ptr<const RigFile> rig_;
-  const RigClip* clip_ = nullptr;  // in *rig_
+  std::shared_ptr<const RigFile> rig_, source_;  // source_: the file whose clip is retargeted
+  std::unique_ptr<Retarget> retarget_;
+  const RigClip* clip_ = nullptr;  // in *rig_, or in *source_ when retargeting
   double clip_t0_ = 0.0, clip_t1_ = 0.0;
 };
 
@@ -179,8 +192,14 @@ void SkeletonParameters::check(const Context& c) const {
     if (!bones.empty()) c.fail("give 'Bones' or a 'Rig' (whose joints are the bones), not both");
     if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
     if (clip_end >= 0.0 && !(clip_end > clip_start)) c.fail("'Clip end' must exceed 'Clip start'");
+    if (!retarget.empty() && joint_map.empty())
+      c.fail("'Retarget from' needs a 'Joint map' ('source joint:rig joint' pairs)", InputErrorKind::MissingEntry);
+    if (retarget.empty())
+      for (const char* retarget_only : {"Joint map", "Retarget scale"})
+        if (c.given(retarget_only)) c.fail("'" + std::string(retarget_only) + "' applies with 'Retarget from' only");
   } else {
-    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights", "Rest time"})
+    for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights",
+                                 "Rest time", "Retarget from", "Joint map", "Retarget scale"})
       if (c.given(rig_only)) c.fail("'" + std::string(rig_only) + "' applies to a skeleton from a 'Rig' only");
   }
   std::map<std::string, std::string> parent_of;
