@@ -97,8 +97,8 @@ done
 
 # The paper-scale character (issue 25): a 48k-cell human driven by a motion capture, the paper's
 # material and its corotational comparison (Fig. 1), on 1 rank x 2 threads.
-# human_crease: the whole crouch to 1.9 s (9 steps), where without contact the calf's flesh passes into
-# the thigh's and up to 143 points invert (at 2.0 s Newton stalls: not run).
+# human_crease: the whole crouch to 1.9 s (9 steps), where up to 143 points invert next to the bones
+# and Newton slows down (at 2.0 s it stalls: not run; docs/performance.md).
 if [ $character -eq 1 ]; then
   scene human_snh_1x2 "$repo/inputs/human.xml" 1 2
   sed 's/value="stable-neohookean"/value="corotational"/' "$repo/inputs/human.xml" > "$out/scenes/human_corot.xml"
