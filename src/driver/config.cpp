@@ -134,6 +134,13 @@ std::string parameter_reference() {
 }
 
 std::string describe(const SceneConfig& c) {
+  // (A rig's files are read again here: check_mesh_file has read them once without error.)
+  auto indented = [](const std::string& text) {
+    std::string out;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) out += "  " + line + "\n";
+    return out;
+  };
   const SceneFileParameters& p = c.params;
   std::ostringstream os;
   os.precision(6);
@@ -143,8 +150,9 @@ std::string describe(const SceneConfig& c) {
     os << "mesh: file " << p.mesh.file << "\n";
   else if (p.mesh.type == "voxelize")
     os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling " << p.mesh.surface << "\n";
-  else if (p.mesh.type == "rig")
-    os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling the skin of " << p.mesh.rig << "\n";
+  else if (p.mesh.type == "rig")  // with what the file holds (meshes, joints, clips), to choose from
+    os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling the skin of " << p.mesh.rig << "\n"
+       << indented(describe(read_rig_file(p.mesh.rig)));
   else
     os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
        << " x " << p.mesh.cells[2] << " cells\n";
@@ -162,6 +170,22 @@ std::string describe(const SceneConfig& c) {
      << p.loading.conditions.size() << " boundary condition" << (p.loading.conditions.size() == 1 ? "" : "s") << "\n";
   for (const auto& [name, bc] : p.loading.conditions)
     os << "  " << name << ": " << bc.region.region << ", components " << bc.components << "\n";
+  if (!p.skeleton.rig.empty()) {
+    os << "skeleton: the joints of " << p.skeleton.rig << ", clip " << (p.skeleton.clip.empty() ? "(the first)" : "'" + p.skeleton.clip + "'")
+       << " of " << (p.skeleton.retarget.empty() ? p.skeleton.rig : p.skeleton.retarget) << " from " << p.skeleton.clip_start << " s to ";
+    if (p.skeleton.clip_end >= 0.0)
+      os << p.skeleton.clip_end << " s";
+    else
+      os << "its end";
+    if (p.skeleton.rest_time >= 0.0) os << ", rest pose at " << p.skeleton.rest_time << " s of its own clip";
+    os << "\n";
+    if (p.mesh.rig != p.skeleton.rig) os << indented(describe(read_rig_file(p.skeleton.rig)));
+    if (!p.skeleton.retarget.empty()) {
+      os << "  the clip retargeted from " << p.skeleton.retarget << " by " << Retarget::parse_map(p.skeleton.joint_map).size()
+         << " joint pairs:\n";
+      os << indented(indented(describe(read_rig_file(p.skeleton.retarget))));
+    }
+  }
   if (!p.skeleton.bones.empty()) {
     os << "skeleton: " << p.skeleton.bones.size() << " bones" << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
     for (const auto& [name, b] : p.skeleton.bones)
