@@ -313,33 +313,36 @@ FastWindingNumber::FastWindingNumber(const TriangleSurface& s, double beta) : s_
   for (std::size_t t = 0; t < s.triangles.size(); ++t)
     for (int v : s.triangles[t]) boxes[t].add(s.vertices[v]);
   tree_.build(boxes);
-  // Each node's sums straight from its triangles: every level holds each triangle once, so the cost
-  // is O(triangles x depth).
+  // Each triangle's area-weighted normal and centroid once; each node's sums straight from its
+  // triangles: every level holds each triangle once, so the cost is O(triangles x depth).
+  std::vector<Vec> normal(s.triangles.size()), centre(s.triangles.size());
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const auto& T = s.triangles[t];
+    normal[t] = 0.5 * cross(s.vertices[T[1]] - s.vertices[T[0]], s.vertices[T[2]] - s.vertices[T[0]]);
+    centre[t] = (1.0 / 3.0) * (s.vertices[T[0]] + s.vertices[T[1]] + s.vertices[T[2]]);
+  }
   far_.resize(tree_.node_count());
   for (int i = 0; i < tree_.node_count(); ++i) {
     Far& f = far_[i];
     double area = 0.0;
     Vec centroid{0.0, 0.0, 0.0}, abs_centroid{0.0, 0.0, 0.0};
     for (int k = tree_.node_begin(i); k < tree_.node_end(i); ++k) {
-      const auto& T = s.triangles[tree_.item(k)];
-      const Vec an = 0.5 * cross(s.vertices[T[1]] - s.vertices[T[0]], s.vertices[T[2]] - s.vertices[T[0]]);
-      const double a = norm(an);
-      const Vec x = (1.0 / 3.0) * (s.vertices[T[0]] + s.vertices[T[1]] + s.vertices[T[2]]);
+      const int t = tree_.item(k);
+      const double a = norm(normal[t]);
       area += a;
-      centroid = centroid + a * x;
-      abs_centroid = abs_centroid + x;
-      f.N = f.N + an;
+      centroid = centroid + a * centre[t];
+      abs_centroid = abs_centroid + centre[t];
+      f.N = f.N + normal[t];
     }
     const int n = tree_.node_end(i) - tree_.node_begin(i);
     f.c = area > 0.0 ? (1.0 / area) * centroid : (1.0 / n) * abs_centroid;  // degenerate triangles only
     double radius2 = 0.0;
     for (int k = tree_.node_begin(i); k < tree_.node_end(i); ++k) {
-      const auto& T = s.triangles[tree_.item(k)];
-      const Vec an = 0.5 * cross(s.vertices[T[1]] - s.vertices[T[0]], s.vertices[T[2]] - s.vertices[T[0]]);
-      const Vec d = (1.0 / 3.0) * (s.vertices[T[0]] + s.vertices[T[1]] + s.vertices[T[2]]) - f.c;
+      const int t = tree_.item(k);
+      const Vec d = centre[t] - f.c;
       for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) f.T[a][b] += an[a] * d[b];
-      for (int v : T) radius2 = std::max(radius2, distance2(s.vertices[v], f.c));
+        for (int b = 0; b < 3; ++b) f.T[a][b] += normal[t][a] * d[b];
+      for (int v : s.triangles[t]) radius2 = std::max(radius2, distance2(s.vertices[v], f.c));
     }
     f.r2 = beta * beta * radius2;
   }
