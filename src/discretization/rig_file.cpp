@@ -306,7 +306,7 @@ std::vector<int> chosen_meshes(const RigFile& rig, const std::string& meshes) {
 
 }  // namespace
 
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world, bool flip) {
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world) {
   TriangleSurface s;
   s.path = rig.path;
   for (int m : chosen_meshes(rig, meshes)) {
@@ -316,26 +316,21 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const
     for (const auto& t : rig.meshes[m].triangles) s.triangles.push_back({base + t[0], base + t[1], base + t[2]});
   }
   if (s.triangles.empty()) bad(rig.path, "the chosen meshes have no triangles");
-  if (flip)
-    for (auto& T : s.triangles) std::swap(T[1], T[2]);
   s.set_bounds();
   return s;
 }
 
-bool rig_surface_flipped(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world) {
-  const TriangleSurface s = rig_surface(rig, meshes, world, false);
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {
+  TriangleSurface s = rig_surface(rig, meshes, rig.pose(clip, seconds));
+  // Turned outward as a whole when the soup's signed volume is negative.
   double volume = 0.0;
   for (const auto& T : s.triangles) {
     const auto &a = s.vertices[T[0]], &b = s.vertices[T[1]], &c = s.vertices[T[2]];
     volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
-  return volume < 0.0;
-}
-
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {
-  // Turned outward as a whole when the soup's signed volume is negative.
-  const std::vector<Affine> world = rig.pose(clip, seconds);
-  return rig_surface(rig, meshes, world, rig_surface_flipped(rig, meshes, world));
+  if (volume < 0.0)
+    for (auto& T : s.triangles) std::swap(T[1], T[2]);
+  return s;
 }
 
 std::vector<std::pair<std::string, std::string>> Retarget::parse_map(const std::string& text) {

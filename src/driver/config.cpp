@@ -69,7 +69,9 @@ void check_mesh_file(const SceneConfig& c) {
     }
     if (!p.skeleton.rig.empty()) {
       const RigFile rig = read_rig_file(p.skeleton.rig);
-      const RigFile moving = p.skeleton.retarget.empty() ? rig : read_rig_file(p.skeleton.retarget);
+      RigFile source;  // a retargeted motion's file
+      if (!p.skeleton.retarget.empty()) source = read_rig_file(p.skeleton.retarget);
+      const RigFile& moving = p.skeleton.retarget.empty() ? rig : source;
       if (!moving.clip(p.skeleton.clip))
         throw InputError("Skeleton: " + moving.path + " has no clip" + (p.skeleton.clip.empty() ? "" : " '" + p.skeleton.clip + "'"));
       if (!p.skeleton.retarget.empty()) {

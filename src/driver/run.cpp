@@ -77,17 +77,17 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   if (scene_->dynamic()) output.every *= scene_->time().substeps;  // Output/Every counts frames
   out_ = std::make_unique<Output>(output, scene_->system(), scene_->name(), scene_->steps(), restart_step);
   out_->set_physics(physics);
-  // A rigged character: the file's own linear-blend skin (the same meshes, so the topology of
-  // skin_*.obj) posed at the clip's time of each written step, beside the simulated skin.
+  // A rigged character: the file's own linear-blend skin posed at the clip's time of each written
+  // step, beside the simulated skin: the same meshes, with the simulated skin's triangles (the lattice
+  // carries the skin as voxelized; rank 0, which calls this, holds it).
   const Skeleton& skeleton = scene_->skeleton();
+  const Mesh& mesh = scene_->system().mesh();
   if (p.mesh.type == "rig" && skeleton.rig() && p.mesh.rig == p.skeleton.rig)
-    out_->add_surface_sequence("lbs", [&skeleton, meshes = p.mesh.rig_meshes,
-                                       flip = rig_surface_flipped(*skeleton.rig(), p.mesh.rig_meshes, skeleton.rig_pose(0.0))](
-                                          double load, std::vector<double>& x, std::vector<std::array<int, 3>>& triangles) {
-      const TriangleSurface s = rig_surface(*skeleton.rig(), meshes, skeleton.rig_pose(load), flip);
+    out_->add_surface_sequence("lbs", [&skeleton, &mesh, meshes = p.mesh.rig_meshes](double load, std::vector<double>& x,
+                                                                                     std::vector<std::array<int, 3>>& triangles) {
       x.clear();
-      for (const auto& v : s.vertices) x.insert(x.end(), v.begin(), v.end());
-      triangles = s.triangles;
+      for (const auto& v : rig_surface(*skeleton.rig(), meshes, skeleton.rig_pose(load)).vertices) x.insert(x.end(), v.begin(), v.end());
+      triangles = mesh.embedded->triangles;
     });
   talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.

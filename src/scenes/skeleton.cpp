@@ -235,7 +235,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   const int F = std::max(1, static_cast<int>(std::ceil((t1 - t0) * p.sample_rate)));
   std::vector<std::vector<Rigid>> frames(joints.size());
   for (int k = 0; k <= F; ++k) {
-    const std::vector<Affine> W = retarget_ ? retarget_->pose(t0 + (t1 - t0) * k / F) : rig.pose(clip, t0 + (t1 - t0) * k / F);
+    const std::vector<Affine> W = rig_pose(static_cast<double>(k) / F);
     for (std::size_t j = 0; j < joints.size(); ++j) {
       const Affine D = W[joints[j]].after(rest[joints[j]].inverse());
       Rigid T;

@@ -116,10 +116,9 @@ RigFile read_rig_file(const std::string& path);
 // pose of `clip` at `seconds` (nullptr: the bind pose); turned outward as a whole when its signed
 // volume is negative. Throws InputError naming a mesh the file does not have (and those it has).
 TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip = nullptr, double seconds = 0.0);
-// The same skinned by given world transforms of every node; `flip`: turn the triangles over (as
-// the rest pose's surface was), so that every pose has the same triangles.
-TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world, bool flip);
-bool rig_surface_flipped(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world);
+// The same skinned by given world transforms of every node (pose()'s, or a retargeted motion's), its
+// triangles as the file stores them (not turned).
+TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world);
 
 // A clip of another skeleton (a BVH motion capture, another character) carried onto this rig's
 // joints through a joint-name map, in world space and relative to a reference pose of each: a mapped
