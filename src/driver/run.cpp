@@ -282,11 +282,14 @@ void Simulation::write_step(int step, double load) {
 
 void Simulation::print_step(const StepRecord& rec) const {
   if (!talk_) return;
+  // Newton iterations redone because a kept preconditioner had aged (PreconditionerLag).
+  const std::string redone = rec.solve.redone_iterations > 0 ? ", " + std::to_string(rec.solve.redone_iterations) + " redone" : "";
   std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
-              "%.2f s (assembly %.2f, preconditioner %.2f, CG %.2f, line search %.2f%s)\n",
+              "%.2f s (assembly %.2f, preconditioner %.2f in %d update%s%s, CG %.2f, line search %.2f%s)\n",
               rec.solve.newton_iterations, rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0), rec.totals.min_J,
               rec.totals.inverted, rec.solve.seconds_total + rec.seconds_contact, rec.solve.seconds_assembly,
-              rec.solve.seconds_preconditioner, rec.solve.seconds_linear, rec.solve.seconds_line_search,
+              rec.solve.seconds_preconditioner, rec.solve.preconditioner_updates, rec.solve.preconditioner_updates == 1 ? "" : "s",
+              redone.c_str(), rec.solve.seconds_linear, rec.solve.seconds_line_search,
               contact_time(rec).c_str());
   if (dynamics_)
     std::printf("  t = %.6g s: kinetic %.6g, elastic %.6g, potential %.6g, contact %.4g (total %.6g)\n", rec.time, rec.kinetic,

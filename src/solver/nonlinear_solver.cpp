@@ -4,6 +4,7 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
+#include <sinew/solver/preconditioner_lag.hpp>
 
 #include <NOX.H>
 #include <NOX_LineSearch_Generic.H>
@@ -40,10 +41,75 @@ using Extract = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, NodeType>;
 
 // What one solve's callbacks share.
 struct SolveState {
+  // The relative tolerance NOX's forcing term asks of the coming (or the last) linear solve: its Newton
+  // direction writes it into its parameters before each solve.
+  double linear_tolerance() const {
+    if (!nox) return 1e-4;
+    const auto& ls = nox->sublist("Direction").sublist("Newton").sublist("Linear Solver");
+    return ls.isParameter("Tolerance") ? ls.get<double>("Tolerance") : 1e-4;
+  }
+
   HessianPolicy policy;
+  PreconditionerLag* lag = nullptr;           // the solver's, kept across solves with its preconditioner
+  const Teuchos::ParameterList* nox = nullptr;  // the solve's NOX parameters (each linear tolerance)
   EvaluationTotals last;     // the most recent evaluation
   double last_f_norm = 0.0;  // |F| of the most recent residual evaluation
   double seconds_assembly = 0.0;
+};
+
+// The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
+// updated (the inner factory's initializeOp) or kept (its initializeAndReuseOp, which Belos implements
+// by keeping the preconditioner object and changing only the operator) within a CG budget, as
+// PreconditionerLag says.
+class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
+ public:
+  // `state` gives the running solve's state (the lag, the current residual, the tolerance).
+  LaggedSolveFactory(Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner,
+                     std::function<const SolveState&()> state)
+      : inner_(std::move(inner)), state_(std::move(state)) {
+    Teuchos::ParameterList& s = solver_list();
+    max_iterations_ = s.get("Maximum Iterations", 1000);
+  }
+
+  bool isCompatible(const Thyra::LinearOpSourceBase<double>& src) const override { return inner_->isCompatible(src); }
+  Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> createOp() const override { return inner_->createOp(); }
+  void initializeOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
+                    Thyra::LinearOpWithSolveBase<double>* op, const Thyra::ESupportSolveUse use) const override {
+    // Belos re-reads its solver's parameters at every initialization: the budget applies to this solve.
+    int budget = max_iterations_;
+    const SolveState& s = state_();
+    const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget);
+    solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
+    if (update)
+      inner_->initializeOp(src, op, use);
+    else
+      inner_->initializeAndReuseOp(src, op);
+  }
+  void initializeAndReuseOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
+                            Thyra::LinearOpWithSolveBase<double>* op) const override {
+    inner_->initializeAndReuseOp(src, op);
+  }
+  void uninitializeOp(Thyra::LinearOpWithSolveBase<double>* op, Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* src,
+                      Teuchos::RCP<const Thyra::PreconditionerBase<double>>* prec,
+                      Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* approx,
+                      Thyra::ESupportSolveUse* use) const override {
+    inner_->uninitializeOp(op, src, prec, approx, use);
+  }
+  void setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& p) override { inner_->setParameterList(p); }
+  Teuchos::RCP<Teuchos::ParameterList> getNonconstParameterList() override { return inner_->getNonconstParameterList(); }
+  Teuchos::RCP<Teuchos::ParameterList> unsetParameterList() override { return inner_->unsetParameterList(); }
+  Teuchos::RCP<const Teuchos::ParameterList> getParameterList() const override { return inner_->getParameterList(); }
+  Teuchos::RCP<const Teuchos::ParameterList> getValidParameters() const override { return inner_->getValidParameters(); }
+
+ private:
+  // The Belos solver's own sublist ("Solver Types" / the chosen "Solver Type") of the inner factory.
+  Teuchos::ParameterList& solver_list() const {
+    Teuchos::ParameterList& belos = *inner_->getNonconstParameterList();
+    return belos.sublist("Solver Types").sublist(belos.get<std::string>("Solver Type"));
+  }
+  Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner_;
+  std::function<const SolveState&()> state_;
+  int max_iterations_ = 1000;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -174,7 +240,9 @@ class EnergyMerit : public NOX::MeritFunction::Generic {
 //
 // A direction that does not descend (slope >= 0) is never stepped along. From the exact Hessian it
 // means the state is not in the quadratic region yet: the policy falls back to projection and the
-// iteration is redone from the same state (step 0); from the projected Hessian it is a failure.
+// iteration is redone from the same state (step 0); from the projected Hessian it is a failure. Before
+// either, a direction from a kept preconditioner whose solve failed or that does not descend is redone
+// with an updated preconditioner.
 class EnergyBacktrack : public NOX::LineSearch::Generic {
  public:
   EnergyBacktrack(const ElasticModel& model, Teuchos::ParameterList& bt)
@@ -193,6 +261,14 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     const double E0 = model_.energy(xold.getThyraVector());
     const double slope = old.getF().innerProduct(dir);
     const double F0 = old.getNormF();
+    // A direction from a kept preconditioner that failed (PreconditionerLag): redo it with an updated
+    // one, from the same state, before anything else is decided about it.
+    if (state.lag && state.lag->redo(slope < 0.0, F0)) {
+      step = 0.0;
+      grp.computeX(old, dir, 0.0);
+      grp.computeF();
+      return true;
+    }
     if (!(slope < 0.0)) {
       const bool retry = state.policy.last_exact();
       state.policy.direction_not_descent();
@@ -244,7 +320,12 @@ class ProgressObserver : public NOX::Observer {
  public:
   ProgressObserver(std::function<void(const NewtonIterate&)> cb, std::function<bool()> interrupt, const ElasticModel& model)
       : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
-  void runPreLineSearch(const NOX::Solver::Generic&) override {
+  void runPreLineSearch(const NOX::Solver::Generic& solver) override {
+    // The direction's linear solve has just ended: tell the preconditioner's lag how it went.
+    if (PreconditionerLag* lag = model_.state().lag)
+      if (auto stats = solver.getSolverStatistics())
+        lag->solved(stats->linearSolve.lastLinearSolve_NumIterations, model_.state().linear_tolerance(),
+                    stats->linearSolve.lastLinearSolve_Converged, solver.getPreviousSolutionGroup().getNormF());
     t_ls_ = Clock::now();
     asm_before_ls_ = model_.state().seconds_assembly;
   }
@@ -257,6 +338,7 @@ class ProgressObserver : public NOX::Observer {
     it.iteration = solver.getNumIterations();
     it.residual = solver.getSolutionGroup().getNormF();
     if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
+    if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step);
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     it.exact_hessian = model_.state().policy.last_exact();
     if (cb_) cb_(it);
@@ -385,6 +467,7 @@ struct NonlinearSolver::Impl {
   Teuchos::RCP<NOX::Thyra::Group> group;
   double cg_per_newton_after_rebuild = 0.0;
   unsigned pattern_version = 0;  // the system's pattern W was made on
+  PreconditionerLag lag;
 
   // A term asked for new couplings (contact): W on the new graph, and a preconditioner set up afresh.
   void follow_pattern() {
@@ -396,6 +479,7 @@ struct NonlinearSolver::Impl {
 
   void rebuild_next() {
     group = Teuchos::null;
+    lag.reset();
     cg_per_newton_after_rebuild = 0.0;
   }
 
@@ -423,7 +507,8 @@ struct NonlinearSolver::Impl {
     if (error_comm != MPI_COMM_NULL) MPI_Comm_free(&error_comm);
   }
 
-  Impl(System& s, const SolverParameters& p) : sys(s), params(p) {
+  Impl(System& s, const SolverParameters& p)
+      : sys(s), params(p), lag(p.update == "when needed", p.update_factor) {
     MPI_Comm_dup(raw_comm(*s.comm()), &error_comm);
     nox = default_nox(s.comm()->getRank());
     nox.sublist("Line Search").set("Method", p.line_search);
@@ -452,6 +537,8 @@ struct NonlinearSolver::Impl {
     auto strat = Teuchos::rcp(new Teuchos::ParameterList(default_stratimikos()));
     strat->set("Preconditioner Type", p.preconditioner);
     overlay(*strat, p.stratimikos);
+    // Without a preconditioner there is nothing to keep (and a redone iteration would repeat itself).
+    if (strat->get<std::string>("Preconditioner Type") == "None") lag = PreconditionerLag(false, p.update_factor);
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
       auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
       // A problem no larger than the coarse size is a one-level hierarchy: the coarse solver then sees the
@@ -478,7 +565,8 @@ struct NonlinearSolver::Impl {
     Stratimikos::enableMueLu<LO, GO, NodeType>(builder);
     try {
       builder.setParameterList(strat);
-      lowsf = builder.createLinearSolveStrategy("");
+      lowsf = Teuchos::rcp(new LaggedSolveFactory(builder.createLinearSolveStrategy(""),
+                                                  [this]() -> const SolveState& { return model->state(); }));
     } catch (const std::exception& e) {
       throw InputError(std::string("Solver: invalid Stratimikos/Belos/MueLu parameters: ") + e.what());
     }
@@ -519,7 +607,8 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   Impl& m = *impl_;
   const SolverParameters& p = m.params;
   const auto t0 = Clock::now();
-  SolveState state{policy, {}, 0.0, 0.0};
+  SolveState state{policy, &m.lag, nullptr, {}, 0.0, 0.0};
+  const int updates_before = m.lag.updates(), redos_before = m.lag.redos();
   m.follow_pattern();
   m.model->attach(&state);
   auto x = Thyra::createVector(Teuchos::rcpFromRef(u), Thyra::createVectorSpace<double, LO, GO, NodeType>(u.getMap()));
@@ -565,6 +654,8 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     tests->addStatusTest(converged);
     tests->addStatusTest(maxiters);
 
+    state.nox = params.get();  // NOX's Newton direction writes each linear solve's tolerance there
+    m.lag.start();
     auto solver = NOX::Solver::buildSolver(group, tests, params);
     const NOX::StatusTest::StatusType status = solver->solve();
     report.newton_iterations = solver->getNumIterations();
@@ -596,7 +687,10 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     const char* wait = std::getenv("SINEW_MEET_SECONDS");
     meet_or_abort(m.error_comm, report.detail, wait ? std::atof(wait) : 60.0);
   }
+  state.nox = nullptr;
   report.exact_hessian_used = state.policy.exact_used();
+  report.preconditioner_updates = m.lag.updates() - updates_before;
+  report.redone_iterations = m.lag.redos() - redos_before;
   report.exact_hessian_fell_back = state.policy.fell_back();
   m.model->attach(nullptr);
   report.seconds_total = since(t0);

@@ -24,8 +24,8 @@ struct SolverParameters {
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
   int max_iterations = 0;
   std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
-  std::string near_null_space, rebuild, inverted;
-  double rebuild_factor = 0.0;
+  std::string near_null_space, rebuild, update, inverted;
+  double rebuild_factor = 0.0, update_factor = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
 
@@ -71,6 +71,16 @@ struct SolverParameters {
              "the last setup (and after a failed step); in between, each Newton iteration reuses the "
              "prolongators (MueLu 'reuse: type')");
     v.entry("Rebuild factor", rebuild_factor, 1.5, "see 'Preconditioner rebuild'", Range::closed(1.0, 1e6));
+    // Default 'when needed', measured against 'every Newton iteration' (nonlinear_solver.cpp,
+    // PreconditionerLag; docs/performance.md).
+    v.choice("Preconditioner update", update, std::string("when needed"),
+             Choices<std::string>{{"when needed", "when needed"}, {"every Newton iteration", "every Newton iteration"}},
+             "between setups from scratch: update the preconditioner for every Newton iteration's Jacobian "
+             "(MueLu's Galerkin products and smoothers on the kept prolongators), or keep it, across Newton "
+             "iterations and load steps, until a linear solve needs more than 'Update factor' times the CG "
+             "iterations per digit of the first solve after the last update, or fails, or gives a direction "
+             "that does not descend");
+    v.entry("Update factor", update_factor, 1.5, "see 'Preconditioner update'", Range::closed(1.0, 1e6));
     // Default 0.01, measured: 15^3 twist 19 + 32 -> 15 + 15 Newton iterations and 15.0 -> 7.9 s; 16x16x32
     // stretch 78.7 -> 28.7 s; same end states (the projection only changes the path, not the solution).
     v.entry("Exact Hessian below", exact_below, 0.01,

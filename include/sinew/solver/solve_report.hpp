@@ -33,6 +33,8 @@ struct SolveReport {
   bool exact_hessian_fell_back = false;  // ... and the solve went back to projection (HessianPolicy)
   int newton_iterations = 0;
   int linear_iterations = 0;  // CG iterations summed over the Newton iterations
+  int preconditioner_updates = 0;  // Newton iterations whose preconditioner was set up or updated
+  int redone_iterations = 0;       // ... redone because a kept preconditioner failed (PreconditionerLag)
   double initial_residual = 0.0, final_residual = 0.0;
   double seconds_assembly = 0.0, seconds_preconditioner = 0.0, seconds_linear = 0.0, seconds_line_search = 0.0,
          seconds_total = 0.0;
@@ -59,6 +61,8 @@ struct SolveReport {
     exact_hessian_fell_back = exact_hessian_fell_back || r.exact_hessian_fell_back;
     newton_iterations += r.newton_iterations;
     linear_iterations += r.linear_iterations;
+    preconditioner_updates += r.preconditioner_updates;
+    redone_iterations += r.redone_iterations;
     seconds_assembly += r.seconds_assembly;
     seconds_preconditioner += r.seconds_preconditioner;
     seconds_linear += r.seconds_linear;

@@ -1,0 +1,117 @@
+// Whether a Newton iteration updates the preconditioner for its new Jacobian or keeps the one it has,
+// as one explicit state machine kept across the solves of a run (the preconditioner outlives them).
+//
+// An update is MueLu's "reuse: type" path (the Galerkin products and smoothers of the new matrix on the
+// prolongators of the last setup from scratch) and costs about as much as the CG solve it serves (on the
+// 48k-cell human: 0.6 s per Newton iteration against 0.8 s of CG). A kept one is the last update's
+// hierarchy applied to the new matrix (the Jacobian is refilled in place, so the fine level's smoother
+// multiplies by the new values). Through the small changes of a Newton iteration near a solution, or of a
+// load step of a slow motion, it stays nearly as good; through a large rotation (the twist's first
+// iterations) it can be useless (441 CG instead of 9, or no convergence in 2,000). So:
+//  - a kept preconditioner has a CG budget: 2 `factor` times the iterations per digit of residual
+//    reduction of the first solve after the last update (per digit, because the Eisenstat-Walker
+//    tolerance changes from solve to solve), times the digits asked now, and at least `min_budget` (a
+//    budget of `factor` alone made the human's kept solves fail at 18 of 18 iterations and cost a redone
+//    iteration each);
+//  - a kept solve over budget, or whose direction does not descend, is redone from the same state with an
+//    updated preconditioner (the line search steps 0), and nothing is kept again in that solve until the
+//    residual is ten times below where the kept one failed (as HessianPolicy's fall-back);
+//  - a kept solve within budget but slower than `factor` times the baseline's rate, or a step the line
+//    search had to cut (the state moved where the quadratic model is poor and the Jacobian changes the
+//    most), has the next iteration update.
+// Its inputs are global counts and norms, so every rank makes the same decisions.
+//
+//   Updated --(solve within factor x baseline, full step)--> Kept --(over budget / no descent)--> redo, Updated
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+namespace sinew {
+
+class PreconditionerLag {
+ public:
+  static constexpr int min_budget = 10;
+
+  // enabled = false: update for every Jacobian (the budget is then never set).
+  PreconditionerLag(bool enabled, double factor) : enabled_(enabled), factor_(factor) {}
+
+  static double digits(double tolerance) { return std::max(1.0, -std::log10(tolerance)); }
+
+  // A new nonlinear solve: failures of the last one are forgotten.
+  void start() {
+    keep_below_ = HUGE_VAL;
+    redo_ = false;
+  }
+
+  // Before a Jacobian's linear solver is initialized, at a state of residual `residual`, for a solve to the
+  // relative `tolerance`: update the preconditioner (true), or keep it, with CG limited to `budget`?
+  bool update(double residual, double tolerance, int& budget) {
+    kept_ = enabled_ && !update_next_ && baseline_ > 0.0 && residual < keep_below_;
+    if (!kept_) {
+      update_next_ = false;
+      baseline_ = 0.0;
+      ++updates_;
+      return true;
+    }
+    budget = std::max(min_budget, static_cast<int>(std::ceil(2.0 * factor_ * baseline_ * digits(tolerance))));
+    return false;
+  }
+
+  // After that linear solve: `iterations` CG to `tolerance`, converged or not (over budget), at residual
+  // `residual`.
+  void solved(int iterations, double tolerance, bool converged, double residual) {
+    if (!enabled_) return;
+    const double per_digit = iterations / digits(tolerance);
+    if (!kept_)
+      baseline_ = converged ? std::max(per_digit, 1.0) : 0.0;
+    else if (!converged)
+      fail(residual);
+    else if (per_digit > factor_ * baseline_)
+      update_next_ = true;
+  }
+
+  // The line search's question before it steps: redo the last direction from the same state (with an
+  // updated preconditioner)? Yes when it came from a kept preconditioner and its solve failed, or it does
+  // not descend (`descends` false).
+  bool redo(bool descends, double residual) {
+    if (kept_ && !descends && !redo_) fail(residual);
+    const bool r = redo_;
+    if (r) ++redos_;
+    redo_ = false;
+    return r;
+  }
+
+  // After the line search: a step it had to cut has the next iteration update.
+  void stepped(double step) {
+    if (step < 1.0) update_next_ = true;
+  }
+
+  // A new linear solver (a new Newton group, a new matrix pattern): its first preconditioner is set up
+  // afresh whatever this says.
+  void reset() {
+    update_next_ = true;
+    baseline_ = 0.0;
+    kept_ = false;
+  }
+
+  bool kept() const { return kept_; }
+  int updates() const { return updates_; }  // preconditioner setups and updates so far
+  int redos() const { return redos_; }      // Newton iterations redone so far
+
+ private:
+  void fail(double residual) {
+    redo_ = true;
+    update_next_ = true;
+    keep_below_ = 0.1 * residual;
+  }
+
+  bool enabled_;
+  double factor_;
+  bool update_next_ = true, kept_ = false, redo_ = false;
+  double baseline_ = 0.0;         // CG iterations per digit of the first solve after the last update
+  double keep_below_ = HUGE_VAL;  // after a failure: keep again only once the residual is below this
+  int updates_ = 0, redos_ = 0;
+};
+
+}  // namespace sinew
