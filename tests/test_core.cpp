@@ -339,7 +339,7 @@ TEST(PreconditionerLag, EveryTransition) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_TRUE(every.update(1.0, 1e-2, budget));
     every.solved(10, 1e-2, true, 1.0);
-    every.stepped(1.0);
+    every.stepped(1.0, 0.0);
   }
   EXPECT_EQ(every.updates(), 3);
   EXPECT_EQ(budget, -1);  // never limited
@@ -349,7 +349,7 @@ TEST(PreconditionerLag, EveryTransition) {
   lag.start();
   EXPECT_TRUE(lag.update(100.0, 1e-2, budget));  // nothing to keep yet
   lag.solved(10, 1e-2, true, 100.0);               // baseline: 5 CG per digit
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(10.0, 1e-2, budget));  // kept
   EXPECT_TRUE(lag.kept());
   EXPECT_EQ(budget, 30);  // 2 x 1.5 x 5 per digit x 2 digits
@@ -357,18 +357,18 @@ TEST(PreconditionerLag, EveryTransition) {
   EXPECT_EQ(budget, 60);  // 4 digits asked
   lag.solved(28, 1e-4, true, 10.0);  // 7 per digit, within 1.5 x 5: kept again
   EXPECT_FALSE(lag.redo(true, 10.0));
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(5.0, 1e-2, budget));
   lag.solved(16, 1e-2, true, 5.0);  // 8 per digit, slower than 1.5 x 5: the next one updates
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_TRUE(lag.update(1.0, 1e-2, budget));
   EXPECT_FALSE(lag.kept());
   EXPECT_EQ(lag.updates(), 2);
   lag.solved(2, 1e-2, true, 1.0);  // 1 per digit: the budget never falls below its floor
-  lag.stepped(0.5);                // a cut step: the next one updates
+  lag.stepped(0.5, 0.0);           // a cut step: the next one updates
   EXPECT_TRUE(lag.update(1.0, 1e-2, budget));
   lag.solved(2, 1e-2, true, 1.0);
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(1.0, 1e-2, budget));
   EXPECT_EQ(budget, PreconditionerLag::min_budget);
 
@@ -380,10 +380,10 @@ TEST(PreconditionerLag, EveryTransition) {
   EXPECT_FALSE(lag.redo(true, 1.0));  // asked once per failure
   EXPECT_TRUE(lag.update(1.0, 1e-2, budget));
   lag.solved(10, 1e-2, true, 1.0);
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_TRUE(lag.update(0.2, 1e-2, budget));  // not yet ten times below 1.0
   lag.solved(10, 1e-2, true, 0.2);
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(0.05, 1e-2, budget));
   // A kept direction that does not descend: redone too.
   lag.solved(10, 1e-2, true, 0.05);
@@ -394,11 +394,18 @@ TEST(PreconditionerLag, EveryTransition) {
   lag.solved(10, 1e-2, true, 0.001);
   EXPECT_FALSE(lag.redo(false, 0.001));
   // A new solve forgets the failures of the last; a new linear solver forgets the baseline.
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   lag.start();
   EXPECT_FALSE(lag.update(50.0, 1e-2, budget));
   lag.solved(10, 1e-2, true, 50.0);
-  lag.stepped(1.0);
+  lag.stepped(1.0, 0.0);
   lag.reset();
   EXPECT_TRUE(lag.update(50.0, 1e-2, budget));
+  // A full step that does not halve the residual: the next one updates.
+  lag.solved(10, 1e-2, true, 50.0);
+  lag.stepped(1.0, 10.0);
+  EXPECT_FALSE(lag.update(10.0, 1e-2, budget));
+  lag.solved(10, 1e-2, true, 10.0);
+  lag.stepped(1.0, 6.0);
+  EXPECT_TRUE(lag.update(6.0, 1e-2, budget));
 }

@@ -338,7 +338,7 @@ class ProgressObserver : public NOX::Observer {
     it.iteration = solver.getNumIterations();
     it.residual = solver.getSolutionGroup().getNormF();
     if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
-    if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step);
+    if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step, it.residual);
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     it.exact_hessian = model_.state().policy.last_exact();
     if (cb_) cb_(it);

@@ -16,9 +16,13 @@
 //  - a kept solve over budget, or whose direction does not descend, is redone from the same state with an
 //    updated preconditioner (the line search steps 0), and nothing is kept again in that solve until the
 //    residual is ten times below where the kept one failed (as HessianPolicy's fall-back);
-//  - a kept solve within budget but slower than `factor` times the baseline's rate, or a step the line
-//    search had to cut (the state moved where the quadratic model is poor and the Jacobian changes the
-//    most), has the next iteration update.
+//  - a kept solve within budget but slower than `factor` times the baseline's rate, a step the line
+//    search had to cut, or one that did not halve the residual (the state is where the quadratic model is
+//    poor and the Jacobian changes the most), has the next iteration update. The last matters beyond the
+//    preconditioner's cost: CG to the same relative residual with a weaker preconditioner leaves more
+//    error in the smooth, nearly incompressible modes, and where Newton is far from its quadratic region
+//    that costs iterations (the 30^3 twist kept its preconditioner through a stretch of full steps that
+//    did not reduce the residual and took 163 Newton iterations and a cut instead of 56).
 // Its inputs are global counts and norms, so every rank makes the same decisions.
 //
 //   Updated --(solve within factor x baseline, full step)--> Kept --(over budget / no descent)--> redo, Updated
@@ -62,6 +66,7 @@ class PreconditionerLag {
   // `residual`.
   void solved(int iterations, double tolerance, bool converged, double residual) {
     if (!enabled_) return;
+    solved_at_ = residual;
     const double per_digit = iterations / digits(tolerance);
     if (!kept_)
       baseline_ = converged ? std::max(per_digit, 1.0) : 0.0;
@@ -82,9 +87,10 @@ class PreconditionerLag {
     return r;
   }
 
-  // After the line search: a step it had to cut has the next iteration update.
-  void stepped(double step) {
-    if (step < 1.0) update_next_ = true;
+  // After the line search, with the residual it reached: a step it had to cut, or one that did not halve
+  // the residual, has the next iteration update.
+  void stepped(double step, double residual) {
+    if (step < 1.0 || !(residual < 0.5 * solved_at_)) update_next_ = true;
   }
 
   // A new linear solver (a new Newton group, a new matrix pattern): its first preconditioner is set up
@@ -111,6 +117,7 @@ class PreconditionerLag {
   bool update_next_ = true, kept_ = false, redo_ = false;
   double baseline_ = 0.0;         // CG iterations per digit of the first solve after the last update
   double keep_below_ = HUGE_VAL;  // after a failure: keep again only once the residual is below this
+  double solved_at_ = HUGE_VAL;   // the residual at which the last linear solve's Jacobian was taken
   int updates_ = 0, redos_ = 0;
 };
 
