@@ -43,6 +43,7 @@ AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, con
     loop.target = r.target;
     loop.want_force = r.want_force;
     loop.want_matrix = r.want_matrix;
+    loop.mean_dilatation = law.mean_dilatation;
     loop.fields = r.fields;
     AssemblyTotals t;
     Kokkos::parallel_reduce("sinew::element_loop", Kokkos::RangePolicy<Exec>(0, static_cast<int>(elements.extent(0))), loop, t);

@@ -14,6 +14,7 @@
 
 #include <sinew/discretization/shape_functions.hpp>
 #include <sinew/materials/material.hpp>
+#include <sinew/materials/mean_dilatation.hpp>
 
 #include <Kokkos_Core.hpp>
 
@@ -158,12 +159,9 @@ KOKKOS_INLINE_FUNCTION void add_point_totals(AssemblyTotals& t, const PointState
 }
 
 // ---- compute: the whole element --------------------------------------------------------------------
-template <class Element, class Model, class MemorySpace>
-KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection projection,
-                                            const ElementGeometry<MemorySpace>& g, int e,
-                                            const double ue[3 * Element::nodes], bool want_force,
-                                            bool want_matrix, ElementResult<Element>& r) {
-  constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
+template <class Element>
+KOKKOS_INLINE_FUNCTION void clear_result(bool want_matrix, ElementResult<Element>& r) {
+  constexpr int NDOF = 3 * Element::nodes;
   r.totals.energy = r.totals.volume = 0.0;
   r.totals.min_J = HUGE_VAL;
   r.totals.inverted = r.totals.undefined = 0;
@@ -171,6 +169,64 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
   if (want_matrix)
     for (int a = 0; a < NDOF; ++a)
       for (int c = 0; c < NDOF; ++c) r.K[a][c] = 0.0;
+}
+
+// The element with its law's volume term on the mean dilatation (mean_dilatation.hpp): a first pass
+// over the points for Jbar, a second for the energy, force and stiffness with the volume factor at Jbar,
+// and the element's rank-one volume stiffness (lambda / V) b b^T, b_(ai) = sum_q w_q cof(F_q)_iJ dN_a,J.
+template <class Element, class Law, class MemorySpace>
+KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Projection projection,
+                                                            const ElementGeometry<MemorySpace>& g, int e,
+                                                            const double ue[3 * Element::nodes], bool want_force,
+                                                            bool want_matrix, ElementResult<Element>& r) {
+  constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
+  clear_result(want_matrix, r);
+  PointState<Element> s[Element::points];
+  double V = 0.0, JV = 0.0;
+  for (int q = 0; q < Element::points; ++q) {
+    evaluate_point<Element>(law, g, e, q, ue, s[q]);
+    V += s[q].w;
+    JV += s[q].w * s[q].J;
+  }
+  MeanDilatationPoint<Law> point;
+  point.law = law;
+  point.Jbar = JV / V;
+  double b[NDOF];
+  for (int k = 0; k < NDOF; ++k) b[k] = 0.0;
+  for (int q = 0; q < Element::points; ++q) {
+    PointState<Element>& p = s[q];
+    p.psi = p.defined ? point.energy(p.F) : HUGE_VAL;
+    add_point_totals(r.totals, p);
+    if (want_force) add_point_force<NPE>(r.f, point.pk1(p.F), p.dN, p.w);
+    if (want_matrix) {
+      add_point_stiffness<NPE>(r.K, point.projected_hessian(p.F, point_projection(projection, p.J)), p.dN, p.w);
+      add_point_force<NPE>(b, cofactor(p.F), p.dN, p.w);
+    }
+  }
+  r.totals.energy += point.element_energy(V);
+  if (want_matrix) {
+    const double k = law.volume_term().lambda / V;
+    for (int a = 0; a < NDOF; ++a)
+      for (int c = a; c < NDOF; ++c) r.K[a][c] += k * b[a] * b[c];
+    for (int a = 1; a < NDOF; ++a)
+      for (int c = 0; c < a; ++c) r.K[a][c] = r.K[c][a];
+  }
+  r.psi_avg = r.totals.energy / V;
+  r.J_avg = point.Jbar;
+}
+
+// `mean_dilatation`: the law's volume term on the element's mean dilatation (laws with a volume term
+// only; the parameters refuse it for the others, and here it is ignored for them).
+template <class Element, class Model, class MemorySpace>
+KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection projection,
+                                            const ElementGeometry<MemorySpace>& g, int e,
+                                            const double ue[3 * Element::nodes], bool want_force,
+                                            bool want_matrix, ElementResult<Element>& r, bool mean_dilatation = false) {
+  if constexpr (has_volume_term<Model>::value) {
+    if (mean_dilatation) return compute_element_mean_dilatation<Element>(model, projection, g, e, ue, want_force, want_matrix, r);
+  }
+  constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
+  clear_result(want_matrix, r);
   double psi_sum = 0.0, J_sum = 0.0, w_sum = 0.0;
   for (int q = 0; q < Element::points; ++q) {
     PointState<Element> s;
@@ -248,6 +304,7 @@ struct ElementLoop : TotalsReduction {
   Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
   Target target;
   bool want_force = false, want_matrix = false;
+  bool mean_dilatation = false;  // the law's volume term on the element's mean dilatation
   ElementFields<memory_space> fields;
 
 
@@ -258,7 +315,7 @@ struct ElementLoop : TotalsReduction {
     double ue[NDOF];
     gather<Element>(geometry, u, e, dof, ue);
     ElementResult<Element> r;
-    compute_element<Element>(model, projection, geometry, e, ue, want_force, want_matrix, r);
+    compute_element<Element>(model, projection, geometry, e, ue, want_force, want_matrix, r, mean_dilatation);
     if (e < geometry.n_owned) {
       totals.add(r.totals);
       if (fields.wanted()) {

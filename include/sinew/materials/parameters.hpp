@@ -74,7 +74,7 @@ struct MaterialLaw {
   std::string model;
   double young = 0.0, poisson = 0.0, density = 0.0;
   std::optional<double> lame_mu, lame_lambda;
-  std::string projection;
+  std::string projection, volumetric;
   MaterialOptions options;
 
   template <class V>
@@ -90,6 +90,11 @@ struct MaterialLaw {
             Range::positive());
     v.entry("Projection", projection, std::string("clamp"),
             "Hessian PSD projection: none, clamp (Smith et al. 2018, Sec. 4) or abs (Chen et al. 2024)");
+    v.entry("Volumetric", volumetric, std::string("points"),
+            "where the law's volume term lambda/2 (J - alpha)^2 is evaluated: at every quadrature point (the paper's "
+            "element), or on each element's mean dilatation (current over reference volume; one volume constraint per "
+            "hex8 instead of eight, against locking when nearly incompressible): points or mean dilatation "
+            "(stable-neohookean and stable-neohookean-nobarrier only; a tet4 has one point, where both agree)");
 #define SINEW_MODEL_VISIT(M) std::get<static_cast<std::size_t>(model_of<M>()) + 1>(options).visit(v);
     SINEW_MATERIAL_MODELS(SINEW_MODEL_VISIT)
 #undef SINEW_MODEL_VISIT
@@ -106,6 +111,12 @@ struct MaterialLaw {
       c.fail(msg + "; known models: " + or_list(names));
     }
     if (!find_projection()) c.fail("'Projection' must be one of none, clamp, abs; got \"" + projection + "\"");
+    if (volumetric != "points" && volumetric != "mean dilatation")
+      c.fail("'Volumetric' must be points or mean dilatation, got \"" + volumetric + "\"");
+    if (volumetric == "mean dilatation" &&
+        !with_material(spec(), [](const auto& law) { return has_volume_term<std::decay_t<decltype(law)>>::value; }))
+      c.fail("'Volumetric' mean dilatation needs a law with a volume term lambda/2 (J - alpha)^2 (stable-neohookean, "
+             "stable-neohookean-nobarrier), not " + model);
     const bool has_en = c.given("Young modulus") || c.given("Poisson ratio");
     const bool has_lame = c.given("Lame mu") || c.given("Lame lambda");
     if (has_en && has_lame) c.fail("give either 'Young modulus'/'Poisson ratio' or 'Lame mu'/'Lame lambda', not both");
@@ -133,6 +144,7 @@ struct MaterialLaw {
     }
     s.options = options;
     s.projection = find_projection().value_or(Projection::Clamp);
+    s.mean_dilatation = volumetric == "mean dilatation";
     s.density = density;
     return s;
   }
@@ -194,6 +206,7 @@ inline std::string describe(const MaterialSpec& s) {
   os.precision(6);
   os << to_string(s.model) << " (E = " << young_modulus(s) << ", nu = " << poisson_ratio(s) << ", mu_L = " << s.mu_L
      << ", lambda_L = " << s.lambda_L << ", projection " << to_string(s.projection);
+  if (s.mean_dilatation) os << ", volume term on the mean dilatation";
   MaterialSpec copy = s;
   material_detail::OptionWriter w{os};
   switch (s.model) {

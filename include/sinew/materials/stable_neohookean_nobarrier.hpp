@@ -5,6 +5,7 @@
 #pragma once
 
 #include <sinew/materials/material.hpp>
+#include <sinew/materials/mean_dilatation.hpp>
 
 namespace sinew {
 
@@ -33,6 +34,9 @@ struct StableNeoHookeanNoBarrier : InvariantModel<StableNeoHookeanNoBarrier> {
   KOKKOS_INLINE_FUNCTION Mat3 pk1(const Mat3& F) const {
     return mu * F + (lambda * (det(F) - alpha)) * cofactor(F);
   }
+
+  // Its volume term lambda/2 (J - alpha)^2 (the rest does not depend on J): mean dilatation splits it off.
+  KOKKOS_INLINE_FUNCTION VolumeTerm volume_term() const { return VolumeTerm{lambda, alpha}; }
 
   KOKKOS_INLINE_FUNCTION InvariantCoefficients coefficients(const Mat3& F) const {
     return InvariantCoefficients{mu, 0.0, lambda, lambda * (det(F) - alpha)};
