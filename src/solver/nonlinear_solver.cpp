@@ -510,7 +510,7 @@ struct NonlinearSolver::Impl {
   }
 
   Impl(System& s, const SolverParameters& p)
-      : sys(s), params(p), lag(p.update == "when needed", p.update_factor) {
+      : sys(s), params(p), lag(false, p.update_factor) {
     MPI_Comm_dup(raw_comm(*s.comm()), &error_comm);
     nox = default_nox(s.comm()->getRank());
     nox.sublist("Line Search").set("Method", p.line_search);
@@ -540,7 +540,8 @@ struct NonlinearSolver::Impl {
     strat->set("Preconditioner Type", p.preconditioner);
     overlay(*strat, p.stratimikos);
     // Without a preconditioner there is nothing to keep (and a redone iteration would repeat itself).
-    if (strat->get<std::string>("Preconditioner Type") == "None") lag = PreconditionerLag(false, p.update_factor);
+    lag = PreconditionerLag(p.update == "when needed" && strat->get<std::string>("Preconditioner Type") != "None",
+                            p.update_factor);
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
       auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
       // A problem no larger than the coarse size is a one-level hierarchy: the coarse solver then sees the
@@ -689,7 +690,6 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     const char* wait = std::getenv("SINEW_MEET_SECONDS");
     meet_or_abort(m.error_comm, report.detail, wait ? std::atof(wait) : 60.0);
   }
-  state.nox = nullptr;
   report.exact_hessian_used = state.policy.exact_used();
   report.preconditioner_updates = m.lag.updates() - updates_before;
   report.redone_iterations = m.lag.redos() - redos_before;

@@ -171,6 +171,14 @@ KOKKOS_INLINE_FUNCTION void clear_result(bool want_matrix, ElementResult<Element
       for (int c = 0; c < NDOF; ++c) r.K[a][c] = 0.0;
 }
 
+// The element stiffness is accumulated in its upper triangle (it is symmetric): mirror it once.
+template <class Element>
+KOKKOS_INLINE_FUNCTION void mirror_stiffness(ElementResult<Element>& r) {
+  constexpr int NDOF = 3 * Element::nodes;
+  for (int a = 1; a < NDOF; ++a)
+    for (int c = 0; c < a; ++c) r.K[a][c] = r.K[c][a];
+}
+
 // The element with its law's volume term on the mean dilatation (mean_dilatation.hpp): a first pass
 // over the points for Jbar, a second for the energy, force and stiffness with the volume factor at Jbar,
 // and the element's rank-one volume stiffness (lambda / V) b b^T, b_(ai) = sum_q w_q cof(F_q)_iJ dN_a,J.
@@ -195,7 +203,8 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
   for (int k = 0; k < NDOF; ++k) b[k] = 0.0;
   for (int q = 0; q < Element::points; ++q) {
     PointState<Element>& p = s[q];
-    p.psi = p.defined ? point.energy(p.F) : HUGE_VAL;
+    // evaluate_point gave the law's whole energy density: keep its deviatoric part.
+    if (p.defined) p.psi = point.deviatoric(p.psi, p.J);
     add_point_totals(r.totals, p);
     if (want_force) add_point_force<NPE>(r.f, point.pk1(p.F), p.dN, p.w);
     if (want_matrix) {
@@ -208,8 +217,7 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
     const double k = law.volume_term().lambda / V;
     for (int a = 0; a < NDOF; ++a)
       for (int c = a; c < NDOF; ++c) r.K[a][c] += k * b[a] * b[c];
-    for (int a = 1; a < NDOF; ++a)
-      for (int c = 0; c < a; ++c) r.K[a][c] = r.K[c][a];
+    mirror_stiffness(r);
   }
   r.psi_avg = r.totals.energy / V;
   r.J_avg = point.Jbar;
@@ -225,7 +233,7 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
   if constexpr (has_volume_term<Model>::value) {
     if (mean_dilatation) return compute_element_mean_dilatation<Element>(model, projection, g, e, ue, want_force, want_matrix, r);
   }
-  constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
+  constexpr int NPE = Element::nodes;
   clear_result(want_matrix, r);
   double psi_sum = 0.0, J_sum = 0.0, w_sum = 0.0;
   for (int q = 0; q < Element::points; ++q) {
@@ -238,9 +246,7 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
     if (want_force) add_point_force<NPE>(r.f, model.pk1(s.F), s.dN, s.w);
     if (want_matrix) add_point_stiffness<NPE>(r.K, model.projected_hessian(s.F, point_projection(projection, s.J)), s.dN, s.w);
   }
-  if (want_matrix)
-    for (int a = 1; a < NDOF; ++a)
-      for (int c = 0; c < a; ++c) r.K[a][c] = r.K[c][a];
+  if (want_matrix) mirror_stiffness(r);
   r.psi_avg = psi_sum / w_sum;
   r.J_avg = J_sum / w_sum;
 }

@@ -46,10 +46,11 @@ struct MeanDilatationPoint : InvariantModel<MeanDilatationPoint<Law>> {
   double Jbar = 1.0;
 
   KOKKOS_INLINE_FUNCTION bool defined(const Mat3& F) const { return law.defined(F); }
-  KOKKOS_INLINE_FUNCTION double energy(const Mat3& F) const {
+  KOKKOS_INLINE_FUNCTION double energy(const Mat3& F) const { return deviatoric(law.energy(F), det(F)); }
+  // Psi_dev from the law's own energy density psi at a point of dilatation J.
+  KOKKOS_INLINE_FUNCTION double deviatoric(double psi, double J) const {
     const VolumeTerm v = law.volume_term();
-    const double d = det(F) - v.alpha;
-    return law.energy(F) - 0.5 * v.lambda * d * d;
+    return psi - 0.5 * v.lambda * (J - v.alpha) * (J - v.alpha);
   }
   KOKKOS_INLINE_FUNCTION Mat3 pk1(const Mat3& F) const {
     return law.pk1(F) + (law.volume_term().lambda * (Jbar - det(F))) * cofactor(F);
