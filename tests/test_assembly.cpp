@@ -8,6 +8,7 @@
 #include <sinew/algebra/system.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
+#include <sinew/discretization/colouring.hpp>
 
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Tpetra_Core.hpp>
@@ -16,7 +17,10 @@
 #include <Tpetra_Vector.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <map>
+#include <memory>
 
 using namespace sinew;
 using namespace sinew::test;
@@ -48,6 +52,42 @@ TEST(Mesh, CountsOwnershipAndGhosts) {
     // A rank holds its slab plus at most one ghost layer, not the whole mesh.
     if (world()->getSize() > 1) {
       EXPECT_LT(m.local_nodes(), static_cast<std::size_t>(m.global_nodes));
+    }
+  }
+}
+
+TEST(Mesh, ColouredChunksShareNoNodeWithinAColourAndKeepEveryElementOnce) {
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    const Mesh m = build_mesh(box(5, type, 6), *world());
+    auto c = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.conn);
+    const int npe = nodes_per_element(type);
+    std::vector<int> conn(m.local_elements() * npe), ids;
+    for (std::size_t e = 0; e < m.local_elements(); ++e) {
+      for (int a = 0; a < npe; ++a) conn[e * npe + a] = c(e, a);
+      if (e % 3 != 1) ids.push_back(static_cast<int>(e));  // a sub-list, as a material block is
+    }
+    for (int chunk : {1, 4, 32, 100000}) {
+      const ElementChunks ch = colour_element_chunks(ids, conn, npe, m.local_nodes(), chunk);
+      std::vector<int> sorted = ch.elements;
+      std::sort(sorted.begin(), sorted.end());
+      EXPECT_EQ(sorted, ids) << "chunk " << chunk;
+      ASSERT_EQ(ch.chunk_begin.front(), 0);
+      ASSERT_EQ(ch.chunk_begin.back(), static_cast<int>(ids.size()));
+      ASSERT_EQ(ch.colour_begin.back() + 1, static_cast<int>(ch.chunk_begin.size()));
+      for (int k = 0; k < ch.colours(); ++k) {
+        std::vector<int> owner(m.local_nodes(), -1);  // the chunk of this colour that touched the node
+        for (int q = ch.colour_begin[k]; q < ch.colour_begin[k + 1]; ++q)
+          for (int i = ch.chunk_begin[q]; i < ch.chunk_begin[q + 1]; ++i)
+            for (int a = 0; a < npe; ++a) {
+              int& o = owner[conn[static_cast<std::size_t>(ch.elements[i]) * npe + a]];
+              EXPECT_TRUE(o == -1 || o == q) << "colour " << k << ": chunks " << o << " and " << q << " share a node";
+              o = q;
+            }
+      }
+      EXPECT_LE(ch.chunk_begin.size() - 1, (ids.size() + chunk - 1) / chunk);
+      // One element per chunk on a lattice in lexicographic order: the 8 parity classes of hex8.
+      if (chunk == 1 && type == ElementType::Hex8 && world()->getSize() == 1) EXPECT_EQ(ch.colours(), 8);
+      if (chunk == 100000) EXPECT_EQ(ch.colours(), 1);
     }
   }
 }
@@ -380,6 +420,57 @@ TEST(Assembly, DirichletEliminationIsSymmetric) {
     }
   }
   EXPECT_GT(min_eigenvalue(D), 0.0);  // fixing a face removes the rigid modes
+}
+
+TEST(Assembly, ColouredScatterAddsWhatAtomicAddsAndTheSameBitsOnEveryBackend) {
+  // The element loop without atomics (coloured chunks, ElementLoop::chunks) against the one with an
+  // atomic add per entry (SINEW_ASSEMBLY_CHUNK=0): the same sums to round-off. And since no two threads
+  // ever add into one entry, the order of the sums no longer depends on the threads: Serial and OpenMP
+  // give the same bits.
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    const auto spec = material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp);
+    auto make = [&](const char* chunk) {
+      if (chunk) setenv("SINEW_ASSEMBLY_CHUNK", chunk, 1);
+      auto s = std::make_unique<System>(world(), build_mesh(box(6, type), *world()), spec);
+      unsetenv("SINEW_ASSEMBLY_CHUNK");
+      return s;
+    };
+    for (const char* chunk : {static_cast<const char*>(nullptr), "3"}) {
+      auto coloured = make(chunk), atomic = make("0");
+      auto u = coloured->create_vector(), ua = atomic->create_vector();
+      for (auto [s, v] : {std::pair{coloured.get(), u.get()}, std::pair{atomic.get(), ua.get()}})
+        set_displacement(*s, *v, [&](const std::array<double, 3>& X, int c, long long g) {
+          return 0.1 * hash_unit(g, c, 7) + (c == 1 ? 0.4 * X[0] * X[2] : 0.0);
+        });
+      auto f = coloured->create_vector(), fser = coloured->create_vector(), fa = atomic->create_vector();
+      auto K = coloured->create_matrix(), Kser = coloured->create_matrix(), Ka = atomic->create_matrix();
+      coloured->evaluate(*u, f.get(), K.get());
+      coloured->evaluate(*u, fser.get(), Kser.get(), Backend::Serial);
+      atomic->evaluate(*ua, fa.get(), Ka.get());
+      const auto x = K->getLocalMatrixHost().values, xs = Kser->getLocalMatrixHost().values,
+                 xa = Ka->getLocalMatrixHost().values;
+      ASSERT_EQ(x.extent(0), xa.extent(0));
+      double kmax = 0.0, dk = 0.0;
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < x.extent(0); ++i) {
+        differ += x(i) != xs(i);
+        kmax = std::max(kmax, std::fabs(xa(i)));
+        dk = std::max(dk, std::fabs(x(i) - xa(i)));
+      }
+      EXPECT_EQ(differ, 0u) << "matrix entries that differ between Serial and OpenMP";
+      EXPECT_LT(dk, 1e-13 * kmax);
+      EXPECT_GT(kmax, 0.0);
+      const auto a = f->getLocalViewHost(Tpetra::Access::ReadOnly), b = fser->getLocalViewHost(Tpetra::Access::ReadOnly),
+                 c = fa->getLocalViewHost(Tpetra::Access::ReadOnly);
+      double fmax = 0.0, df = 0.0;
+      for (std::size_t i = 0; i < a.extent(0); ++i) {
+        EXPECT_EQ(a(i, 0), b(i, 0)) << "force entry " << i;
+        fmax = std::max(fmax, std::fabs(c(i, 0)));
+        df = std::max(df, std::fabs(a(i, 0) - c(i, 0)));
+      }
+      EXPECT_LT(df, 1e-13 * fmax);
+    }
+  }
 }
 
 TEST(Assembly, BackendsAndRanksAgree) {

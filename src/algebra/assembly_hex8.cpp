@@ -4,8 +4,8 @@
 namespace sinew::detail {
 template <class Exec>
 AssemblyTotals assemble_hex8(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
-                             const AssemblyRequest& r) {
-  return assemble_with<Exec, Hex8>(law, projection, elements, r);
+                             const Chunks& chunks, const AssemblyRequest& r) {
+  return assemble_with<Exec, Hex8>(law, projection, elements, chunks, r);
 }
 }  // namespace sinew::detail
 

@@ -4,10 +4,12 @@
 #include <sinew/algebra/system.hpp>
 #include <sinew/algebra/terms/elastic.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/discretization/colouring.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace sinew {
 
@@ -27,14 +29,38 @@ ElasticTerm::ElasticTerm(const Mesh& mesh, const ElementData& elements, const Ma
       if (mesh_.in_group(e, group)) block_of[e] = static_cast<int>(laws.size());
     laws.push_back(law);
   }
+  // Chunks of 32 elements: measured in docs/performance.md (SINEW_ASSEMBLY_CHUNK overrides it for
+  // benchmarks; 0 gives one element per work item with atomic adds, the device's way).
+  int chunk = 32;
+  if (const char* env = std::getenv("SINEW_ASSEMBLY_CHUNK")) chunk = std::max(0, std::atoi(env));
+  const int npe = nodes_per_element(mesh_.type);
+  std::vector<int> conn;
+  if (chunk > 0) {
+    auto c = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
+    conn.resize(ne * npe);
+    for (std::size_t e = 0; e < ne; ++e)
+      for (int a = 0; a < npe; ++a) conn[e * npe + a] = c(e, a);
+  }
+  auto to_view = [](const std::string& label, const std::vector<int>& v) {
+    Kokkos::View<int*> d(label, v.size());
+    auto h = Kokkos::create_mirror_view(d);
+    for (std::size_t k = 0; k < v.size(); ++k) h(k) = v[k];
+    Kokkos::deep_copy(d, h);
+    return d;
+  };
   for (std::size_t b = 0; b < laws.size(); ++b) {
     std::vector<int> ids;
     for (std::size_t e = 0; e < ne; ++e)
       if (block_of[e] == static_cast<int>(b)) ids.push_back(static_cast<int>(e));
-    Block blk{laws[b], Kokkos::View<int*>("block elements", ids.size())};
-    auto h = Kokkos::create_mirror_view(blk.elements);
-    for (std::size_t k = 0; k < ids.size(); ++k) h(k) = ids[k];
-    Kokkos::deep_copy(blk.elements, h);
+    Block blk{laws[b], {}, {}, {}};
+    if (chunk > 0) {
+      ElementChunks chunks = colour_element_chunks(ids, conn, npe, mesh_.local_nodes(), chunk);
+      blk.elements = to_view("block elements", chunks.elements);
+      blk.chunks = to_view("block element chunks", chunks.chunk_begin);
+      blk.colour_begin = chunks.colour_begin;
+    } else {
+      blk.elements = to_view("block elements", ids);
+    }
     blocks_.push_back(blk);
   }
 }
@@ -81,19 +107,20 @@ void ElasticTerm::add(const TermInput& in, TermOutput& out) const {
   for (const Block& b : blocks_) {
     if (b.elements.extent(0) == 0) continue;
     Projection p = in.projection.value_or(b.law.projection);
+    const detail::Chunks chunks{b.chunks, b.colour_begin};
     // "Exact where not inverted" keeps the law's own projection for the inverted points.
     if (p == Projection::ExactUninvertedClamp || p == Projection::ExactUninvertedAbs)
       p = b.law.projection == Projection::Abs ? Projection::ExactUninvertedAbs
           : b.law.projection == Projection::None ? Projection::None : Projection::ExactUninvertedClamp;
 #if defined(KOKKOS_ENABLE_SERIAL) && defined(KOKKOS_ENABLE_OPENMP)
     if (in.backend == Backend::Serial) {
-      t.add(hex ? detail::assemble_hex8<Kokkos::Serial>(b.law, p, b.elements, r)
-                : detail::assemble_tet4<Kokkos::Serial>(b.law, p, b.elements, r));
+      t.add(hex ? detail::assemble_hex8<Kokkos::Serial>(b.law, p, b.elements, chunks, r)
+                : detail::assemble_tet4<Kokkos::Serial>(b.law, p, b.elements, chunks, r));
       continue;
     }
 #endif
-    t.add(hex ? detail::assemble_hex8<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, r)
-              : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, r));
+    t.add(hex ? detail::assemble_hex8<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, chunks, r)
+              : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, chunks, r));
   }
   EvaluationTotals& o = out.totals;
   o.elastic += t.energy;

@@ -8,6 +8,10 @@
 //   int owned_dofs;                            rows [0, owned_dofs) are this rank's
 //   void add_force(int row, double value) const;                        atomically
 //   void add_row(int row, const int* cols, int n, const double* values) const;   atomically
+//   template <int NPE> void add_node_rows(const int* dof, int a, const double (*K)[3 * NPE]) const;
+//                                  the three rows of element node a
+//   bool atomic;                   whether adds must be atomic (false: the caller guarantees that no
+//                                  two concurrent work items share a row; see ElementLoop::chunks)
 // Boundary conditions are not the kernel's business: it adds every contribution; the algebra layer
 // eliminates Dirichlet rows and columns afterwards.
 #pragma once
@@ -17,6 +21,9 @@
 #include <sinew/materials/mean_dilatation.hpp>
 
 #include <Kokkos_Core.hpp>
+
+#include <type_traits>
+#include <utility>
 
 namespace sinew {
 
@@ -256,13 +263,34 @@ KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection proje
 template <class Element, class Target>
 KOKKOS_INLINE_FUNCTION void scatter(const Target& target, const int dof[3 * Element::nodes],
                                     const ElementResult<Element>& r, bool want_force, bool want_matrix) {
-  constexpr int NDOF = 3 * Element::nodes;
-  for (int a = 0; a < NDOF; ++a) {
-    const int row = dof[a];
+  for (int a = 0; a < Element::nodes; ++a) {
+    const int row = dof[3 * a];  // a node's three rows are owned together
     if (row >= target.owned_dofs) continue;
-    if (want_force) target.add_force(row, r.f[a]);
-    if (want_matrix) target.add_row(row, dof, NDOF, r.K[a]);
+    if (want_force)
+      for (int i = 0; i < 3; ++i) target.add_force(row + i, r.f[3 * a + i]);
+    if (want_matrix) target.template add_node_rows<Element::nodes>(dof, a, r.K);
   }
+}
+
+// The CRS arrays of a local matrix: KokkosSparse's CrsMatrix (Tpetra's local matrix) keeps them in
+// `graph`, LocalCsr as members.
+template <class M, class = void>
+struct HasCsrGraph : std::false_type {};
+template <class M>
+struct HasCsrGraph<M, std::void_t<decltype(std::declval<const M&>().graph.row_map)>> : std::true_type {};
+template <class M>
+KOKKOS_INLINE_FUNCTION const auto& csr_row_map(const M& m) {
+  if constexpr (HasCsrGraph<M>::value)
+    return m.graph.row_map;
+  else
+    return m.row_map;
+}
+template <class M>
+KOKKOS_INLINE_FUNCTION const auto& csr_entries(const M& m) {
+  if constexpr (HasCsrGraph<M>::value)
+    return m.graph.entries;
+  else
+    return m.entries;
 }
 
 // A scatter target over any local CRS matrix with KokkosSparse's sumIntoValues (Tpetra's local matrix,
@@ -273,9 +301,59 @@ struct CrsTarget {
   LocalMatrix matrix;
   ForceView force;
   int owned_dofs = 0;
-  KOKKOS_INLINE_FUNCTION void add_force(int row, double value) const { Kokkos::atomic_add(&force(row), value); }
+  // Atomic adds cost a compare-and-swap loop each on the host (a quarter of a hex8 element's time, 576
+  // per element); the coloured element loop turns them off.
+  bool atomic = true;
+  KOKKOS_INLINE_FUNCTION void add(double& to, double value) const {
+    if (atomic)
+      Kokkos::atomic_add(&to, value);
+    else
+      to += value;
+  }
+  KOKKOS_INLINE_FUNCTION void add_force(int row, double value) const { add(force(row), value); }
   KOKKOS_INLINE_FUNCTION void add_row(int row, const int* cols, int n, const double* values) const {
-    matrix.sumIntoValues(row, cols, n, values, true, true);
+    matrix.sumIntoValues(row, cols, n, values, true, atomic);
+  }
+
+  // Element node a's three rows (dof[3a] + i) at the columns of all the element's nodes. System's graph
+  // (build_graph) couples whole nodes: every row lists, for each node m it touches, 3m, 3m+1, 3m+2,
+  // sorted, and a node's three rows list the same nodes. So one binary search over the node starts of
+  // row 3a finds node b's slot k, and block (a, b) is at row_map(3a+i) + 3k + j: one search per node
+  // pair instead of one per entry (64 instead of 576 for hex8). Each slot is checked before it is
+  // written; a row that does not hold whole nodes (another pattern) takes sumIntoValues.
+  template <int NPE>
+  KOKKOS_INLINE_FUNCTION void add_node_rows(const int* dof, int a, const double (*K)[3 * NPE]) const {
+    const auto& rows = csr_row_map(matrix);
+    const auto& cols = csr_entries(matrix);
+    const int row0 = dof[3 * a];
+    const int begin0 = static_cast<int>(rows(row0)), length0 = static_cast<int>(rows(row0 + 1)) - begin0;
+    for (int b = 0; b < NPE; ++b) {
+      const int c0 = dof[3 * b];
+      int k = -1;
+      if (length0 % 3 == 0) {
+        int lo = 0, hi = length0 / 3;
+        while (lo < hi) {
+          const int mid = (lo + hi) / 2;
+          if (cols(begin0 + 3 * mid) < c0)
+            lo = mid + 1;
+          else
+            hi = mid;
+        }
+        k = lo;
+      }
+      for (int i = 0; i < 3; ++i) {
+        const double* v = &K[3 * a + i][3 * b];
+        const int begin = static_cast<int>(rows(row0 + i)), end = static_cast<int>(rows(row0 + i + 1));
+        const int p = begin + 3 * k;
+        if (k >= 0 && p + 2 < end && cols(p) == c0 && cols(p + 2) == c0 + 2) {
+          add(matrix.values(p), v[0]);
+          add(matrix.values(p + 1), v[1]);
+          add(matrix.values(p + 2), v[2]);
+        } else {
+          add_row(row0 + i, &dof[3 * b], 3, v);
+        }
+      }
+    }
   }
 };
 
@@ -312,11 +390,23 @@ struct ElementLoop : TotalsReduction {
   bool want_force = false, want_matrix = false;
   bool mean_dilatation = false;  // the law's volume term on the element's mean dilatation
   ElementFields<memory_space> fields;
-
+  // Coloured chunks (discretization/colouring.hpp), or empty: one element per work item, atomic adds.
+  // Work item i is chunk chunk_first + i, the elements elements(chunks(c)) .. elements(chunks(c + 1) - 1),
+  // visited in order by one thread; the launch covers chunks of one colour, which share no node, so
+  // the target may add without atomics.
+  Kokkos::View<const int*, memory_space> chunks;
+  int chunk_first = 0;
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, value_type& totals) const {
+    if (chunks.extent(0) == 0) {
+      element(elements(i), totals);
+      return;
+    }
+    for (int k = chunks(chunk_first + i); k < chunks(chunk_first + i + 1); ++k) element(elements(k), totals);
+  }
+
+  KOKKOS_INLINE_FUNCTION void element(const int e, value_type& totals) const {
     constexpr int NDOF = 3 * Element::nodes;
-    const int e = elements(i);
     int dof[NDOF];
     double ue[NDOF];
     gather<Element>(geometry, u, e, dof, ue);

@@ -1,5 +1,5 @@
-// A plain Kokkos CRS matrix with the one operation the element kernels need (sumIntoValues, atomically,
-// with KokkosSparse's meaning), for builds without Trilinos: the device tests and benchmarks. The host
+// A plain Kokkos CRS matrix with the one operation the element kernels need (sumIntoValues, atomically
+// when asked, with KokkosSparse's meaning), for builds without Trilinos: the device tests and benchmarks. The host
 // solver uses Tpetra's local matrix instead, through the same CrsTarget.
 #pragma once
 
@@ -16,7 +16,7 @@ struct LocalCsr {
 
   // Adds vals[k] at (row, cols[k]) for the columns present in the row; returns how many were.
   KOKKOS_INLINE_FUNCTION int sumIntoValues(int row, const int* cols, int n, const double* vals, bool /*sorted*/,
-                                           bool /*atomic*/) const {
+                                           bool atomic) const {
     const int begin = row_map(row), end = row_map(row + 1);
     int found = 0;
     for (int k = 0; k < n; ++k) {
@@ -29,7 +29,10 @@ struct LocalCsr {
           hi = mid;
       }
       if (lo < end && entries(lo) == cols[k]) {
-        Kokkos::atomic_add(&values(lo), vals[k]);
+        if (atomic)
+          Kokkos::atomic_add(&values(lo), vals[k]);
+        else
+          values(lo) += vals[k];
         ++found;
       }
     }

@@ -36,7 +36,9 @@ class ElasticTerm final : public EnergyTerm {
  private:
   struct Block {
     MaterialSpec law;
-    Kokkos::View<int*> elements;  // local element ids
+    Kokkos::View<int*> elements;  // local element ids, in coloured chunks (discretization/colouring.hpp)
+    Kokkos::View<int*> chunks;    // chunk c is elements [chunks(c), chunks(c + 1)); empty: atomic adds
+    std::vector<int> colour_begin;
   };
   const Mesh& mesh_;
   const ElementData& elements_;
