@@ -473,6 +473,44 @@ TEST(Assembly, ColouredScatterAddsWhatAtomicAddsAndTheSameBitsOnEveryBackend) {
   }
 }
 
+TEST(Assembly, GradientsComputedPerPointGiveTheBitsOfStoredOnes) {
+  // hex8 computes dN/dX at each point from the reference coordinates instead of storing it
+  // (ElementGeometry::dNdX empty): the same arithmetic, so the same matrix and force to the bit, on a
+  // distorted mesh where every element has its own gradients.
+  for (auto type : {ElementType::Hex8, ElementType::Tet4}) {
+    const auto spec = material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp);
+    auto make = [&](const char* store) {
+      setenv("SINEW_STORE_GRADIENTS", store, 1);
+      Mesh mesh = build_mesh(box(4, type), *world());
+      auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+      for (std::size_t n = 0; n < X.extent(0); ++n)
+        for (int c = 0; c < 3; ++c) X(n, c) += 0.03 * hash_unit(mesh.node_gid[n], c, 3);
+      Kokkos::deep_copy(mesh.X, X);
+      auto s = std::make_unique<System>(world(), std::move(mesh), spec);
+      unsetenv("SINEW_STORE_GRADIENTS");
+      return s;
+    };
+    auto stored = make("1"), computed = make("0");
+    std::vector<std::vector<double>> K, f;
+    for (System* s : {stored.get(), computed.get()}) {
+      auto u = s->create_vector(), r = s->create_vector();
+      set_displacement(*s, *u, [&](const std::array<double, 3>& X, int c, long long g) {
+        return 0.1 * hash_unit(g, c, 5) + (c == 2 ? 0.3 * X[0] * X[1] : 0.0);
+      });
+      auto A = s->create_matrix();
+      s->evaluate(*u, r.get(), A.get());
+      const auto v = A->getLocalMatrixHost().values;
+      K.emplace_back(v.data(), v.data() + v.extent(0));
+      f.push_back(gather(*r));
+    }
+    EXPECT_EQ(K[0], K[1]) << (type == ElementType::Hex8 ? "hex8" : "tet4");
+    EXPECT_EQ(f[0], f[1]);
+    double kmax = 0.0;
+    for (double v : K[0]) kmax = std::max(kmax, std::fabs(v));
+    EXPECT_GT(kmax, 0.0);
+  }
+}
+
 TEST(Assembly, BackendsAndRanksAgree) {
   // Serial execution space vs the default one (OpenMP with the threads this test got), and the
   // distributed assembly vs a one-rank assembly of the whole mesh on every rank.

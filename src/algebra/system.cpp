@@ -13,6 +13,7 @@
 #include <Tpetra_Vector.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <unordered_map>
 
@@ -36,7 +37,12 @@ std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t cou
 
 System::System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials)
     : comm_(std::move(comm)), mesh_(std::move(mesh)) {
-  elements_ = compute_element_data(mesh_, *comm_);
+  // hex8 computes dN/dX per point from X: storing it costs 1.5 kB per element (466 bytes per DOF on a
+  // voxel mesh) and saves about 2% of the element loop. tet4 stores it: 96 bytes per element, and its
+  // one-point element loop is 20% slower without (docs/performance.md). SINEW_STORE_GRADIENTS=0 or 1
+  // overrides this, for that comparison.
+  const char* store = std::getenv("SINEW_STORE_GRADIENTS");
+  elements_ = compute_element_data(mesh_, *comm_, store ? std::atoi(store) != 0 : mesh_.type == ElementType::Tet4);
   elastic_ = std::make_shared<ElasticTerm>(mesh_, elements_, materials);
   // A law that no element takes is a mistake the user cannot see in the results: the group is empty,
   // or a region listed after it holds all its elements (the last region listed wins).

@@ -1,4 +1,4 @@
-// Reference-element geometry: dN/dX and w det(dX/dxi) per quadrature point, with a collective check
+// Reference-element geometry: w det(dX/dxi) (and, if asked, dN/dX) per quadrature point, with a collective check
 // that no rest element is degenerate or inverted.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/small_matrix.hpp>
@@ -12,9 +12,11 @@ namespace sinew {
 
 namespace {
 
-// Fills dNdX and wdetJ of element type E; returns the smallest local element with a bad point.
+// Fills wdetJ (and dNdX when it is allocated) of element type E; returns the smallest local element
+// with a bad point.
 template <class E>
 int fill(const Mesh& mesh, ElementData& ed) {
+  const bool store = ed.dNdX.extent(0) > 0;
   auto X = mesh.X;
   auto conn = mesh.conn;
   auto dNdX = ed.dNdX;
@@ -24,27 +26,18 @@ int fill(const Mesh& mesh, ElementData& ed) {
       "sinew::element_data", Kokkos::RangePolicy<>(0, static_cast<int>(mesh.local_elements())),
       KOKKOS_LAMBDA(const int e, int& first_bad) {
         for (int q = 0; q < E::points; ++q) {
-          double dNdxi[E::nodes][3];
-          E::gradients(q, dNdxi);
-          Mat3 J0 = Mat3::zero();  // dX/dxi
-          for (int a = 0; a < E::nodes; ++a)
-            for (int i = 0; i < 3; ++i)
-              for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
-          const double dJ = det(J0);
+          double dN[E::nodes][3];
+          const double dJ = reference_gradients<E>(conn, X, e, q, dN);
           const std::size_t p = static_cast<std::size_t>(e) * E::points + q;
           if (!(dJ > 0.0)) {
             first_bad = e < first_bad ? e : first_bad;
             wdetJ(p) = 0.0;
             continue;
           }
-          const Mat3 Jinv = (1.0 / dJ) * transpose(cofactor(J0));  // cofactor columns: f1 x f2, ... => A^-1 = C^T / det
           wdetJ(p) = E::weight(q) * dJ;
-          for (int a = 0; a < E::nodes; ++a)
-            for (int j = 0; j < 3; ++j) {
-              double s = 0.0;
-              for (int d = 0; d < 3; ++d) s += dNdxi[a][d] * Jinv(d, j);
-              dNdX(p, a, j) = s;
-            }
+          if (store)
+            for (int a = 0; a < E::nodes; ++a)
+              for (int j = 0; j < 3; ++j) dNdX(p, a, j) = dN[a][j];
         }
       },
       Kokkos::Min<int>(bad));
@@ -53,13 +46,13 @@ int fill(const Mesh& mesh, ElementData& ed) {
 
 }  // namespace
 
-ElementData compute_element_data(const Mesh& mesh, const Teuchos::Comm<int>& comm) {
+ElementData compute_element_data(const Mesh& mesh, const Teuchos::Comm<int>& comm, bool store_gradients) {
   ElementData ed;
   ed.type = mesh.type;
   ed.npe = nodes_per_element(mesh.type);
   ed.nqp = quadrature_points(mesh.type);
   const std::size_t ne = mesh.local_elements();
-  ed.dNdX = Kokkos::View<double***>("dNdX", ne * ed.nqp, ed.npe, 3);
+  if (store_gradients) ed.dNdX = Kokkos::View<double***>("dNdX", ne * ed.nqp, ed.npe, 3);
   ed.wdetJ = Kokkos::View<double*>("wdetJ", ne * ed.nqp);
   const int bad = mesh.type == ElementType::Hex8 ? fill<Hex8>(mesh, ed) : fill<Tet4>(mesh, ed);
   // Every rank must agree on the error: reduce the smallest bad global element id.
@@ -78,6 +71,7 @@ ElementGeometry<Kokkos::DefaultExecutionSpace::memory_space> element_geometry(co
   ElementGeometry<Kokkos::DefaultExecutionSpace::memory_space> g;
   g.conn = mesh.conn;
   g.dNdX = ed.dNdX;
+  g.X = mesh.X;
   g.wdetJ = ed.wdetJ;
   g.n_owned = static_cast<int>(mesh.n_owned_elements);
   return g;

@@ -3,6 +3,7 @@
 // solve: the Hessian policy and the last evaluation's totals.
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/core/memory.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 #include <sinew/solver/preconditioner_lag.hpp>
 
@@ -82,10 +83,12 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     // Fault injection for the tests of the redo path: a CG budget that no kept solve meets.
     if (const char* forced = std::getenv("SINEW_KEPT_CG_BUDGET"); forced && !update) budget = std::atoi(forced);
     solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
+    trace_memory("matrix assembled");
     if (update)
       inner_->initializeOp(src, op, use);
     else
       inner_->initializeAndReuseOp(src, op);
+    trace_memory(update ? "preconditioner set up" : "preconditioner kept");
   }
   void initializeAndReuseOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
                             Thyra::LinearOpWithSolveBase<double>* op) const override {
@@ -324,6 +327,7 @@ class ProgressObserver : public NOX::Observer {
       : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
   void runPreLineSearch(const NOX::Solver::Generic& solver) override {
     // The direction's linear solve has just ended: tell the preconditioner's lag how it went.
+    trace_memory("linear solve");
     if (PreconditionerLag* lag = model_.state().lag)
       if (auto stats = solver.getSolverStatistics())
         lag->solved(stats->linearSolve.lastLinearSolve_NumIterations, model_.state().linear_tolerance(),

@@ -42,14 +42,41 @@ struct AssemblyTotals {
   }
 };
 
-// What every kernel reads about the elements: computed once per mesh (see elements.hpp).
+// What every kernel reads about the elements (see elements.hpp). The shape-function gradients dN/dX
+// are either stored per point (dNdX, 1.5 kB per hex8: 466 bytes per DOF on a voxel mesh) or, when dNdX
+// is empty, computed at each point from the reference coordinates X by the same arithmetic
+// (reference_gradients), which gives the same bits.
 template <class MemorySpace>
 struct ElementGeometry {
   Kokkos::View<const int**, MemorySpace> conn;      // element x node: local node index
-  Kokkos::View<const double***, MemorySpace> dNdX;  // (element * points + q, node, dim)
+  Kokkos::View<const double***, MemorySpace> dNdX;  // (element * points + q, node, dim), or empty
+  Kokkos::View<const double* [3], MemorySpace> X;   // local node x dim: reference coordinates
   Kokkos::View<const double*, MemorySpace> wdetJ;   // (element * points + q): reference volume of the point
   int n_owned = 0;                                  // elements [0, n_owned) are owned, the rest ghosts
 };
+
+// dN/dX at point q of element e from the reference coordinates (the isoparametric map's Jacobian
+// J0 = dX/dxi and dN/dX = dN/dxi J0^-1); returns det J0 (dN is left unset when it is not positive).
+template <class Element, class ConnView, class XView>
+KOKKOS_INLINE_FUNCTION double reference_gradients(const ConnView& conn, const XView& X, int e, int q,
+                                                  double dN[Element::nodes][3]) {
+  double dNdxi[Element::nodes][3];
+  Element::gradients(q, dNdxi);
+  Mat3 J0 = Mat3::zero();  // dX/dxi
+  for (int a = 0; a < Element::nodes; ++a)
+    for (int i = 0; i < 3; ++i)
+      for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
+  const double dJ = det(J0);
+  if (!(dJ > 0.0)) return dJ;
+  const Mat3 Jinv = (1.0 / dJ) * transpose(cofactor(J0));  // cofactor columns: f1 x f2, ... => A^-1 = C^T / det
+  for (int a = 0; a < Element::nodes; ++a)
+    for (int j = 0; j < 3; ++j) {
+      double v = 0.0;
+      for (int d = 0; d < 3; ++d) v += dNdxi[a][d] * Jinv(d, j);
+      dN[a][j] = v;
+    }
+  return dJ;
+}
 
 // Optional per-element outputs: volume averages of the energy density and of J (owned elements).
 template <class MemorySpace>
@@ -144,8 +171,12 @@ KOKKOS_INLINE_FUNCTION void evaluate_point(const Model& model, const ElementGeom
   constexpr int NPE = Element::nodes;
   const std::size_t p = static_cast<std::size_t>(e) * Element::points + q;
   s.w = g.wdetJ(p);
-  for (int a = 0; a < NPE; ++a)
-    for (int J = 0; J < 3; ++J) s.dN[a][J] = g.dNdX(p, a, J);
+  if (g.dNdX.extent(0) > 0) {
+    for (int a = 0; a < NPE; ++a)
+      for (int J = 0; J < 3; ++J) s.dN[a][J] = g.dNdX(p, a, J);
+  } else {
+    reference_gradients<Element>(g.conn, g.X, e, q, s.dN);  // the rest state was checked (elements.cpp)
+  }
   s.F = Mat3::identity();
   for (int a = 0; a < NPE; ++a)
     for (int J = 0; J < 3; ++J)

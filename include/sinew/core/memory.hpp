@@ -1,0 +1,15 @@
+// The process's resident memory, for the run summary and for SINEW_MEMORY_TRACE: with that variable set,
+// each phase that allocates a large share of a run (mesh, element data, graph, matrix, preconditioner,
+// Krylov solve) prints the resident memory after it to stderr, which is how docs/performance.md splits
+// the bytes per DOF.
+#pragma once
+
+namespace sinew {
+
+// Resident memory now, in MB (from /proc/self/statm; 0 where that cannot be read).
+double resident_mb();
+
+// With SINEW_MEMORY_TRACE set: "[memory] <what>: <resident> MB (<change> MB)" on stderr, every rank.
+void trace_memory(const char* what);
+
+}  // namespace sinew
