@@ -4,6 +4,7 @@
 #include <sinew/algebra/terms/elastic.hpp>
 #include <sinew/algebra/terms/external_force.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/core/memory.hpp>
 
 #include <Teuchos_CommHelpers.hpp>
 #include <Tpetra_CrsGraph.hpp>
@@ -37,12 +38,12 @@ std::vector<GO> dof_gids(const std::vector<GlobalId>& node_gids, std::size_t cou
 
 System::System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const MaterialAssignment& materials)
     : comm_(std::move(comm)), mesh_(std::move(mesh)) {
-  // hex8 computes dN/dX per point from X: storing it costs 1.5 kB per element (466 bytes per DOF on a
-  // voxel mesh) and saves about 2% of the element loop. tet4 stores it: 96 bytes per element, and its
-  // one-point element loop is 20% slower without (docs/performance.md). SINEW_STORE_GRADIENTS=0 or 1
-  // overrides this, for that comparison.
+  trace_memory("mesh");
+  // SINEW_STORE_GRADIENTS=1 stores dN/dX per point even for a voxel mesh, to compare with one
+  // inverse Jacobian per element (docs/performance.md).
   const char* store = std::getenv("SINEW_STORE_GRADIENTS");
-  elements_ = compute_element_data(mesh_, *comm_, store ? std::atoi(store) != 0 : mesh_.type == ElementType::Tet4);
+  elements_ = compute_element_data(mesh_, *comm_, store && std::atoi(store) != 0 ? GradientStorage::PerPoint : GradientStorage::Automatic);
+  trace_memory("element data");
   elastic_ = std::make_shared<ElasticTerm>(mesh_, elements_, materials);
   // A law that no element takes is a mistake the user cannot see in the results: the group is empty,
   // or a region listed after it holds all its elements (the last region listed wins).
@@ -65,6 +66,7 @@ System::System(Teuchos::RCP<const Teuchos::Comm<int>> comm, Mesh mesh, const Mat
   overlap_dofs_ = make_map(dof_gids(mesh_.node_gid, n_local), comm_);
   fixed_ = Kokkos::View<char*>("fixed", 3 * n_local);
   build_graph();
+  trace_memory("maps and graph");
   compute_nodal_weights();
   external_ = std::make_shared<ExternalForceTerm>(nodal_volume_, nodal_mass_);
   terms_ = {elastic_, external_};

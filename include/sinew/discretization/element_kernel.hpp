@@ -43,16 +43,15 @@ struct AssemblyTotals {
 };
 
 // What every kernel reads about the elements (see elements.hpp). The shape-function gradients dN/dX
-// are either stored per point (dNdX, 1.5 kB per hex8: 466 bytes per DOF on a voxel mesh) or, when dNdX
-// is empty, computed at each point from the reference coordinates X by the same arithmetic
-// (reference_gradients), which gives the same bits.
+// are stored per point (dNdX), or for affine elements formed at each point from one inverse Jacobian
+// per element (Jinv, when dNdX is empty).
 template <class MemorySpace>
 struct ElementGeometry {
-  Kokkos::View<const int**, MemorySpace> conn;      // element x node: local node index
-  Kokkos::View<const double***, MemorySpace> dNdX;  // (element * points + q, node, dim), or empty
-  Kokkos::View<const double* [3], MemorySpace> X;   // local node x dim: reference coordinates
-  Kokkos::View<const double*, MemorySpace> wdetJ;   // (element * points + q): reference volume of the point
-  int n_owned = 0;                                  // elements [0, n_owned) are owned, the rest ghosts
+  Kokkos::View<const int**, MemorySpace> conn;       // element x node: local node index
+  Kokkos::View<const double***, MemorySpace> dNdX;   // (element * points + q, node, dim), or empty
+  Kokkos::View<const double* [9], MemorySpace> Jinv;  // element: (dX/dxi)^-1 row-major, or empty
+  Kokkos::View<const double*, MemorySpace> wdetJ;    // (element * points + q): reference volume of the point
+  int n_owned = 0;                                   // elements [0, n_owned) are owned, the rest ghosts
 };
 
 // dN/dX at point q of element e from the reference coordinates (the isoparametric map's Jacobian
@@ -175,7 +174,11 @@ KOKKOS_INLINE_FUNCTION void evaluate_point(const Model& model, const ElementGeom
     for (int a = 0; a < NPE; ++a)
       for (int J = 0; J < 3; ++J) s.dN[a][J] = g.dNdX(p, a, J);
   } else {
-    reference_gradients<Element>(g.conn, g.X, e, q, s.dN);  // the rest state was checked (elements.cpp)
+    double dNdxi[NPE][3];
+    Element::gradients(q, dNdxi);
+    for (int a = 0; a < NPE; ++a)
+      for (int J = 0; J < 3; ++J)
+        s.dN[a][J] = dNdxi[a][0] * g.Jinv(e, J) + dNdxi[a][1] * g.Jinv(e, 3 + J) + dNdxi[a][2] * g.Jinv(e, 6 + J);
   }
   s.F = Mat3::identity();
   for (int a = 0; a < NPE; ++a)
