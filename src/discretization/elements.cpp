@@ -13,6 +13,19 @@ namespace sinew {
 
 namespace {
 
+// dX/dxi of element e where the shape functions have the reference gradients dNdxi.
+template <class E, class ConnView, class XView>
+KOKKOS_INLINE_FUNCTION Mat3 reference_jacobian(const ConnView& conn, const XView& X, int e, const double (&dNdxi)[E::nodes][3]) {
+  Mat3 J0 = Mat3::zero();
+  for (int a = 0; a < E::nodes; ++a)
+    for (int i = 0; i < 3; ++i)
+      for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
+  return J0;
+}
+
+// (dX/dxi)^-1 from its determinant: the cofactor columns are f1 x f2, ..., so A^-1 = C^T / det.
+KOKKOS_INLINE_FUNCTION Mat3 inverse(const Mat3& J0, double dJ) { return (1.0 / dJ) * transpose(cofactor(J0)); }
+
 // Fills wdetJ of element type E and counts the elements whose map from the reference element is not
 // affine (dX/dxi differs between points by more than round-off); returns the smallest local element
 // with a bad point.
@@ -31,10 +44,7 @@ int fill_volumes(const Mesh& mesh, ElementData& ed, long long& not_affine) {
         for (int q = 0; q < E::points; ++q) {
           double dNdxi[E::nodes][3];
           E::gradients(q, dNdxi);
-          Mat3 J0 = Mat3::zero();  // dX/dxi
-          for (int a = 0; a < E::nodes; ++a)
-            for (int i = 0; i < 3; ++i)
-              for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
+          const Mat3 J0 = reference_jacobian<E>(conn, X, e, dNdxi);
           if (q == 0) J_first = J0;
           for (int i = 0; i < 3; ++i)
             for (int d = 0; d < 3; ++d) {
@@ -63,11 +73,17 @@ void fill_gradients(const Mesh& mesh, ElementData& ed) {
   Kokkos::parallel_for(
       "sinew::element_gradients", Kokkos::RangePolicy<>(0, static_cast<int>(mesh.local_elements())), KOKKOS_LAMBDA(const int e) {
         for (int q = 0; q < E::points; ++q) {
-          double dN[E::nodes][3];
-          reference_gradients<E>(conn, X, e, q, dN);
+          double dNdxi[E::nodes][3];
+          E::gradients(q, dNdxi);
+          const Mat3 J0 = reference_jacobian<E>(conn, X, e, dNdxi);
+          const Mat3 Jinv = inverse(J0, det(J0));  // positive: fill_volumes checked every point
           const std::size_t p = static_cast<std::size_t>(e) * E::points + q;
           for (int a = 0; a < E::nodes; ++a)
-            for (int j = 0; j < 3; ++j) dNdX(p, a, j) = dN[a][j];
+            for (int j = 0; j < 3; ++j) {
+              double v = 0.0;
+              for (int d = 0; d < 3; ++d) v += dNdxi[a][d] * Jinv(d, j);
+              dNdX(p, a, j) = v;
+            }
         }
       });
 }
@@ -83,11 +99,8 @@ void fill_inverse_jacobians(const Mesh& mesh, ElementData& ed) {
         const double centre[3] = {0.0, 0.0, 0.0};
         double dNdxi[E::nodes][3];
         E::gradients_at(centre, dNdxi);
-        Mat3 J0 = Mat3::zero();
-        for (int a = 0; a < E::nodes; ++a)
-          for (int i = 0; i < 3; ++i)
-            for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
-        const Mat3 inv = (1.0 / det(J0)) * transpose(cofactor(J0));
+        const Mat3 J0 = reference_jacobian<E>(conn, X, e, dNdxi);
+        const Mat3 inv = inverse(J0, det(J0));
         for (int d = 0; d < 3; ++d)
           for (int j = 0; j < 3; ++j) Jinv(e, 3 * d + j) = inv(d, j);
       });

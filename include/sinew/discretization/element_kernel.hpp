@@ -54,29 +54,6 @@ struct ElementGeometry {
   int n_owned = 0;                                   // elements [0, n_owned) are owned, the rest ghosts
 };
 
-// dN/dX at point q of element e from the reference coordinates (the isoparametric map's Jacobian
-// J0 = dX/dxi and dN/dX = dN/dxi J0^-1); returns det J0 (dN is left unset when it is not positive).
-template <class Element, class ConnView, class XView>
-KOKKOS_INLINE_FUNCTION double reference_gradients(const ConnView& conn, const XView& X, int e, int q,
-                                                  double dN[Element::nodes][3]) {
-  double dNdxi[Element::nodes][3];
-  Element::gradients(q, dNdxi);
-  Mat3 J0 = Mat3::zero();  // dX/dxi
-  for (int a = 0; a < Element::nodes; ++a)
-    for (int i = 0; i < 3; ++i)
-      for (int d = 0; d < 3; ++d) J0(i, d) += X(conn(e, a), i) * dNdxi[a][d];
-  const double dJ = det(J0);
-  if (!(dJ > 0.0)) return dJ;
-  const Mat3 Jinv = (1.0 / dJ) * transpose(cofactor(J0));  // cofactor columns: f1 x f2, ... => A^-1 = C^T / det
-  for (int a = 0; a < Element::nodes; ++a)
-    for (int j = 0; j < 3; ++j) {
-      double v = 0.0;
-      for (int d = 0; d < 3; ++d) v += dNdxi[a][d] * Jinv(d, j);
-      dN[a][j] = v;
-    }
-  return dJ;
-}
-
 // Optional per-element outputs: volume averages of the energy density and of J (owned elements).
 template <class MemorySpace>
 struct ElementFields {
