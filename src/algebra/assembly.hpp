@@ -8,7 +8,6 @@
 
 #include <Tpetra_CrsMatrix_decl.hpp>
 
-#include <cmath>
 #include <vector>
 
 namespace sinew::detail {
@@ -65,7 +64,7 @@ AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, con
     loop.chunks = chunks.offsets;
     loop.target.atomic = false;
     AssemblyTotals t;
-    t.min_J = HUGE_VAL;
+    loop.init(t);  // the reduction's identity: the colours' totals are joined here
     for (std::size_t k = 0; k + 1 < chunks.colour_begin.size(); ++k) {
       loop.chunk_first = chunks.colour_begin[k];
       AssemblyTotals tk;

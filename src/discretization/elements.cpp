@@ -48,9 +48,10 @@ int fill_volumes(const Mesh& mesh, ElementData& ed, long long& not_affine) {
           if (q == 0) J_first = J0;
           for (int i = 0; i < 3; ++i)
             for (int d = 0; d < 3; ++d) {
-              const double v = J0(i, d) < 0.0 ? -J0(i, d) : J0(i, d), dv = J0(i, d) - J_first(i, d);
+              const double v = J0(i, d) < 0.0 ? -J0(i, d) : J0(i, d);
+              const double dv = J0(i, d) < J_first(i, d) ? J_first(i, d) - J0(i, d) : J0(i, d) - J_first(i, d);
               scale = v > scale ? v : scale;
-              spread = (dv < 0.0 ? -dv : dv) > spread ? (dv < 0.0 ? -dv : dv) : spread;
+              spread = dv > spread ? dv : spread;
             }
           const double dJ = det(J0);
           const std::size_t p = static_cast<std::size_t>(e) * E::points + q;

@@ -1,7 +1,7 @@
-// The process's resident memory, for the run summary and for SINEW_MEMORY_TRACE: with that variable set,
-// each phase that allocates a large share of a run (mesh, element data, graph, matrix, preconditioner,
-// Krylov solve) prints the resident memory after it to stderr, which is how docs/performance.md splits
-// the bytes per DOF.
+// The process's resident memory now, for SINEW_MEMORY_TRACE (the run summary's peak comes from
+// getrusage): with that variable set, each phase that allocates a large share of a run (mesh, element
+// data, graph, matrix, preconditioner, Krylov solve) prints the resident memory after it to stderr,
+// which is how docs/performance.md splits the bytes per DOF.
 #pragma once
 
 namespace sinew {

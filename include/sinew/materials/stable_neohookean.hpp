@@ -42,10 +42,10 @@ struct StableNeoHookean : InvariantModel<StableNeoHookean> {
     return (mu * (1.0 - 1.0 / (Ic + 1.0))) * F + (lambda * (J - alpha)) * cofactor(F);
   }
 
-  // Eq. 22 / 41 in the form of Eq. 52: mu_T Id + 2mu/(I_C+1)^2 f f^T + lambda g g^T + lambda (J - alpha) H_J.
   // Its volume term lambda/2 (J - alpha)^2 (the rest does not depend on J): mean dilatation splits it off.
   KOKKOS_INLINE_FUNCTION VolumeTerm volume_term() const { return VolumeTerm{lambda, alpha}; }
 
+  // Eq. 22 / 41 in the form of Eq. 52: mu_T Id + 2mu/(I_C+1)^2 f f^T + lambda g g^T + lambda (J - alpha) H_J.
   KOKKOS_INLINE_FUNCTION InvariantCoefficients coefficients(const Mat3& F) const {
     const double Ic = frobenius2(F), J = det(F);
     const double r = 1.0 / (Ic + 1.0);
