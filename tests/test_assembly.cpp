@@ -422,6 +422,66 @@ TEST(Assembly, DirichletEliminationIsSymmetric) {
   EXPECT_GT(min_eigenvalue(D), 0.0);  // fixing a face removes the rigid modes
 }
 
+TEST(Assembly, TheLiftedForceIsTheForceLinearisedAlongThePrescribedIncrement) {
+  // evaluate_lifted(u, d): f(u) + K(u) d in the free rows (d non-zero in the fixed rows only), zero in
+  // the fixed rows, and K as evaluate() leaves it. Checked against a central difference of the force
+  // along d, whose free rows need the couplings to the fixed DOFs that the elimination removes.
+  System sys(world(), build_mesh(box(3), *world()), material(MaterialModel::StableNeoHookean, 1.0, 0.45, Projection::Clamp));
+  std::vector<int> fixed;
+  for (const char* face : {"z-", "z+"})
+    for (int n : select_nodes(sys.mesh(), face_predicate(sys.mesh(), face)))
+      for (int c = 0; c < 3; ++c) fixed.push_back(3 * n + c);
+  sys.set_fixed_dofs(fixed);
+  auto u = sys.create_vector(), d = sys.create_vector();
+  set_displacement(sys, *u, [&](const std::array<double, 3>&, int c, long long g) { return 0.05 * hash_unit(g, c); });
+  d->putScalar(0.0);
+  {
+    auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+    auto v = d->getLocalViewHost(Tpetra::Access::ReadWrite);
+    for (int i : sys.fixed_owned_dofs()) v(i, 0) = X(i / 3, 2) > 0.5 ? 0.1 * (1 + i % 3) : 0.0;  // the top face moves
+  }
+  auto lifted = sys.create_vector(), f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
+  auto K = sys.create_matrix(), K0 = sys.create_matrix();
+  // The exact Hessian: the difference quotient knows nothing of projections.
+  sys.evaluate_lifted(*u, *d, *lifted, *K, Projection::None);
+  sys.evaluate(*u, f.get(), K0.get(), Backend::Default, Projection::None);
+  const double h = 1e-6;
+  auto up = sys.create_vector(), um = sys.create_vector();
+  up->update(1.0, *u, h, *d, 0.0);
+  um->update(1.0, *u, -h, *d, 0.0);
+  sys.gradient(*up, *fp);
+  sys.gradient(*um, *fm);
+  const auto lg = gather(*lifted), fg = gather(*f), pg = gather(*fp), mg = gather(*fm);
+  std::vector<char> is_fixed(lg.size(), 0);
+  {
+    std::vector<double> mark(3 * sys.mesh().n_owned_nodes, 0.0);
+    for (int i : sys.fixed_owned_dofs()) mark[i] = 1.0;
+    auto mv = sys.create_vector();
+    auto v = mv->getLocalViewHost(Tpetra::Access::OverwriteAll);
+    for (std::size_t i = 0; i < mark.size(); ++i) v(i, 0) = mark[i];
+    const auto mgv = gather(*mv);
+    for (std::size_t i = 0; i < mgv.size(); ++i) is_fixed[i] = mgv[i] != 0.0;
+  }
+  double scale = 0.0, worst = 0.0, lift = 0.0;
+  for (std::size_t i = 0; i < lg.size(); ++i) {
+    if (is_fixed[i]) {
+      EXPECT_EQ(lg[i], 0.0) << i;
+      continue;
+    }
+    const double expected = fg[i] + (pg[i] - mg[i]) / (2 * h);
+    scale = std::max(scale, std::fabs(expected));
+    lift = std::max(lift, std::fabs(expected - fg[i]));
+    worst = std::max(worst, std::fabs(lg[i] - expected));
+  }
+  EXPECT_GT(lift, 1e-3 * scale);  // the increment matters: the test could fail
+  EXPECT_LT(worst, 1e-7 * scale) << "lifted force against f + (f(u + h d) - f(u - h d)) / 2h";
+  const auto D = dense(*K), D0 = dense(*K0);
+  double apart = 0.0;
+  for (std::size_t i = 0; i < D.size(); ++i)
+    for (std::size_t j = 0; j < D.size(); ++j) apart = std::max(apart, std::fabs(D[i][j] - D0[i][j]));
+  EXPECT_EQ(apart, 0.0);  // the same eliminated matrix as evaluate()'s
+}
+
 TEST(Assembly, ColouredScatterAddsWhatAtomicAddsAndTheSameBitsOnEveryBackend) {
   // The element loop without atomics (coloured chunks, ElementLoop::chunks) against the one with an
   // atomic add per entry (SINEW_ASSEMBLY_CHUNK=0): the same sums to round-off. And since no two threads

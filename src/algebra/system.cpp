@@ -322,6 +322,17 @@ EvaluationTotals System::evaluate(const Vector& u, Vector* force, CrsMatrix* K, 
   return run(u, force, K, backend, projection, {});
 }
 
+EvaluationTotals System::evaluate_lifted(const Vector& u, const Vector& d, Vector& force, CrsMatrix& K,
+                                         std::optional<Projection> projection) const {
+  const EvaluationTotals t = run(u, &force, &K, Backend::Default, projection, {}, nullptr, false);
+  // K still couples the prescribed DOFs here: f + K d is the force linearised along the increment.
+  K.apply(d, force, Teuchos::NO_TRANS, 1.0, 1.0);
+  K.resumeFill();
+  eliminate_dirichlet(&force, &K);
+  K.fillComplete(owned_dofs_, owned_dofs_);
+  return t;
+}
+
 void System::element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const {
   ElementFields<DeviceMemory> fields{Kokkos::View<double*>("elem_psi", mesh_.n_owned_elements),
                                      Kokkos::View<double*>("elem_J", mesh_.n_owned_elements)};

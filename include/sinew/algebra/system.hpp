@@ -93,6 +93,12 @@ class System {
   EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default,
                             std::optional<Projection> projection = std::nullopt) const;
 
+  // For an increment d (of prescribed and free DOFs alike): force = f(u) + K(u) d in the free rows, zero
+  // in the Dirichlet ones, and K as evaluate() leaves it. The right-hand side of the linearised response
+  // to a new prescribed motion (a load step's tangent predictor).
+  EvaluationTotals evaluate_lifted(const Vector& u, const Vector& d, Vector& force, CrsMatrix& K,
+                                   std::optional<Projection> projection = std::nullopt) const;
+
   // The gradient with no Dirichlet elimination, of every term or of one: at an equilibrium its
   // prescribed rows are the reactions, and one term's part is the force that term exerts (e.g. the
   // contact force on a body).
