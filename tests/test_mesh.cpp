@@ -334,7 +334,9 @@ TEST(MeshScenes, AffinePatchTestOnAGmshMeshIsExactForEveryModel) {
   for (const auto& model : material_model_names()) {
     Simulation sim(config(box_scene("box_v41.msh", model, 0.3, bc), "test_results/patch" + tag()), RunOptions{true, ""});
     ASSERT_EQ(sim.run(), 0) << model;
-    EXPECT_GT(sim.records().front().solve.newton_iterations, 0) << model;
+    // The interior was moved by a solve: Newton's, or the tangent predictor's CG (the linearised
+    // response to an affine motion is that motion, which may already meet the tolerance).
+    EXPECT_GT(sim.records().front().solve.linear_iterations, 0) << model;
     const auto u = gather(sim.displacement());
     ASSERT_EQ(u.size(), 3 * file.nodes());
     double err = 0.0;

@@ -55,8 +55,9 @@ class Simulation {
   // Advances the state through load step k, cutting the increment when a solve fails.
   StepOutcome advance(int k, StepRecord& rec);
   // The first guess for load t (Dirichlet values set): u_ moved by the skinning predictor, or its
-  // linear extrapolation through u_previous_ when that has the lower (finite) energy.
-  void first_guess(double t, Vector& trial);
+  // linear extrapolation through u_previous_, or the tangent predictor from u_, whichever has the
+  // lowest (finite) energy. Returns the tangent predictor's solve (CG, times; nothing without it).
+  SolveReport first_guess(double t, Vector& trial);
   // Solves for the state at load t from trial; with contact, rounds of detection (new pairs, raised
   // tractions) and solve until a detection changes nothing (or the scene's maximum of solves).
   SolveReport solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
@@ -79,6 +80,10 @@ class Simulation {
   std::function<int()> stop_check_;
   std::function<void(const StepRecord&, const Vector&)> observer_;
   bool initial_given_ = false;
+  // u_ is an equilibrium (rest, a converged step, a checkpoint's state), where the tangent predictor's
+  // linearisation holds; a scrambled or given initial state is not (from the scramble the predictor
+  // took 605 Newton iterations instead of 347).
+  bool at_equilibrium_ = false;
   int stop_signal_ = 0;
   bool talk_ = false;
   double started_ = 0.0;     // wall clock at the start of run(), seconds
