@@ -584,6 +584,13 @@ struct NonlinearSolver::Impl {
         mlist.sublist("coarse: params").set("relaxation: type", "Symmetric Gauss-Seidel");
         mlist.sublist("coarse: params").set("relaxation: sweeps", 2);
       }
+      // MueLu 13.2's "reuse: type" tP with repartitioning inserts into the static graph of a rebalanced
+      // level from inside an OpenMP region (TpetraExt_MatrixMatrix_ExtraKernels_def.hpp:849): the
+      // exception cannot be caught there and ends the process. Refuse the combination up front.
+      if (mlist.get<std::string>("reuse: type", "none") == "tP" && mlist.get<bool>("repartition: enable", false))
+        throw InputError("Solver/Stratimikos: MueLu 'reuse: type' = tP crashes with 'repartition: enable' = true in "
+                         "Trilinos 13.2 (a static-graph insert in a rebalanced level); use RP (the default) or disable "
+                         "repartitioning");
       coordinates = s.coordinates();
       nullspace = s.rigid_body_modes();
       mlist.set("Coordinates", coordinates);
