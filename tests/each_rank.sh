@@ -8,4 +8,12 @@ code=$?
 cat "$dir/rank$rank.err.tmp" >&2
 mv "$dir/rank$rank.err.tmp" "$dir/rank$rank.err"
 echo "$code" > "$dir/rank$rank.code"
+# mpirun ends the other ranks as soon as one exits non-zero: a rank that exits first would have the
+# others killed before they record their code (seen under load: "rank 1 left no exit code"). So no rank
+# exits until every rank has recorded one, or 20 s have passed (a rank that hung or died stays missing).
+size=${OMPI_COMM_WORLD_SIZE:-${PMI_SIZE:-1}}
+for _ in $(seq 400); do
+  [ "$(ls "$dir"/rank*.code 2>/dev/null | wc -l)" -ge "$size" ] && break
+  sleep 0.05
+done
 exit "$code"
