@@ -90,7 +90,7 @@ struct LoadingParameters {
             Range::positive());
     v.entry("Scramble seed", scramble_seed, 1, "scramble: random seed");
     // Default tangent, measured against extrapolate on 1 rank x 2 threads (docs/performance.md): the
-    // 969k-DOF stretch's first step 10 -> 7 Newton iterations and 83.9 -> 67.8 s; every shipped scene
+    // 969k-DOF stretch's first step 10 -> 4 Newton iterations and 83.9 -> 50.0 s; every shipped scene
     // the same or one Newton iteration fewer (the twist's pi/2 rotation refuses the tangent; scenes with
     // contact do not use it).
     v.choice("Predictor", predictor, Predictor::Tangent,
