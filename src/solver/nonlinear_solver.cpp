@@ -759,6 +759,7 @@ SolveReport NonlinearSolver::tangent(const Vector& u0, Vector& trial, double ene
   auto xt = Thyra::createVector(Teuchos::rcpFromRef(x), Thyra::createVectorSpace<double, LO, GO, NodeType>(x.getMap()));
   NOX::Thyra::Vector x0(xt);
   const bool fresh = m.group.is_null();  // this solve sets the hierarchy up from scratch
+  const int updates_before = m.lag.updates();
   try {
     if (fresh)
       m.group = Teuchos::rcp(new NOX::Thyra::Group(x0, m.model, m.W, m.lowsf, Teuchos::null, Teuchos::null, Teuchos::null));
@@ -816,6 +817,7 @@ SolveReport NonlinearSolver::tangent(const Vector& u0, Vector& trial, double ene
     m.rebuild_next();
   }
   m.model->attach(nullptr);
+  report.preconditioner_updates = m.lag.updates() - updates_before;
   report.seconds_total = since(t0);
   report.seconds_assembly = state.seconds_assembly;
   m.take_timers(report);
