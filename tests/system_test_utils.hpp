@@ -36,6 +36,20 @@ inline void set_displacement(const System& sys, Vector& u, Fn&& fn) {
   }
 }
 
+// Per global DOF (on every rank): whether it is a Dirichlet DOF of sys.
+inline std::vector<char> fixed_flags(const System& sys) {
+  Vector f(sys.owned_dofs());
+  f.putScalar(0.0);
+  {
+    auto v = f.getLocalViewHost(Tpetra::Access::ReadWrite);
+    for (int d : sys.fixed_owned_dofs()) v(d, 0) = 1.0;
+  }
+  const auto all = gather(f);
+  std::vector<char> fixed(all.size(), 0);
+  for (std::size_t i = 0; i < all.size(); ++i) fixed[i] = all[i] != 0.0;
+  return fixed;
+}
+
 // Deterministic pseudo-random number in [-1, 1] from a node id and component (same on every rank).
 inline double hash_unit(long long gid, int c, int salt = 0) { return 2.0 * unit_hash(gid, c, salt + 1) - 1.0; }
 

@@ -452,16 +452,7 @@ TEST(Assembly, TheLiftedForceIsTheForceLinearisedAlongThePrescribedIncrement) {
   sys.gradient(*up, *fp);
   sys.gradient(*um, *fm);
   const auto lg = gather(*lifted), fg = gather(*f), pg = gather(*fp), mg = gather(*fm);
-  std::vector<char> is_fixed(lg.size(), 0);
-  {
-    std::vector<double> mark(3 * sys.mesh().n_owned_nodes, 0.0);
-    for (int i : sys.fixed_owned_dofs()) mark[i] = 1.0;
-    auto mv = sys.create_vector();
-    auto v = mv->getLocalViewHost(Tpetra::Access::OverwriteAll);
-    for (std::size_t i = 0; i < mark.size(); ++i) v(i, 0) = mark[i];
-    const auto mgv = gather(*mv);
-    for (std::size_t i = 0; i < mgv.size(); ++i) is_fixed[i] = mgv[i] != 0.0;
-  }
+  const std::vector<char> is_fixed = fixed_flags(sys);
   double scale = 0.0, worst = 0.0, lift = 0.0;
   for (std::size_t i = 0; i < lg.size(); ++i) {
     if (is_fixed[i]) {

@@ -152,16 +152,7 @@ Mode lowest_mode(const System& sys) {
   auto K = sys.create_matrix();
   sys.evaluate(*u, nullptr, K.get(), Backend::Default, Projection::None);
   const auto Kd = dense(*K), Md = dense(*sys.mass_matrix(true));
-  std::vector<char> fixed(Kd.size(), 0);
-  {
-    std::vector<double> flags(Kd.size(), 0.0), all;
-    Vector f(sys.owned_dofs());
-    auto fv = f.getLocalViewHost(Tpetra::Access::OverwriteAll);
-    for (std::size_t i = 0; i < fv.extent(0); ++i) fv(i, 0) = 0.0;
-    for (int d : sys.fixed_owned_dofs()) fv(d, 0) = 1.0;
-    all = gather(f);
-    for (std::size_t i = 0; i < all.size(); ++i) fixed[i] = all[i] != 0.0;
-  }
+  const std::vector<char> fixed = fixed_flags(sys);
   std::vector<int> free;
   for (std::size_t i = 0; i < Kd.size(); ++i)
     if (!fixed[i]) free.push_back(static_cast<int>(i));

@@ -268,13 +268,12 @@ SolveReport Simulation::first_guess(double t, Vector& trial) {
   // (two blocks pressed together on 2 ranks then ended in another contact state than on 1).
   const bool linearise = scene.tangent_predictor() && at_equilibrium_ && !extrapolate && !scene.contact();
   if (!extrapolate && !linearise) return tangent;
-  auto defined = [](const EvaluationTotals& e) { return e.undefined == 0 && std::isfinite(e.energy); };
   // A candidate replaces the guess when its energy is defined and below the guess's (or the guess's is not).
   EvaluationTotals best = sys.evaluate(trial, nullptr, nullptr);
   const char* chosen = "the last state";
   auto consider = [&](const Vector& candidate, const char* name) {
     const EvaluationTotals e = sys.evaluate(candidate, nullptr, nullptr);
-    if (defined(e) && !(defined(best) && best.energy <= e.energy)) {
+    if (e.energy_defined() && !(best.energy_defined() && best.energy <= e.energy)) {
       trial.assign(candidate);
       best = e;
       chosen = name;
@@ -288,7 +287,7 @@ SolveReport Simulation::first_guess(double t, Vector& trial) {
     consider(*candidate, "extrapolated");
   }
   if (linearise) {
-    tangent = solver_->tangent(*u_, trial, defined(best) ? best.energy : HUGE_VAL);
+    tangent = solver_->tangent(*u_, trial, best.energy_defined() ? best.energy : HUGE_VAL);
     if (tangent.converged()) chosen = "tangent";
     if (talk_) {
       std::printf("  predictor: %s (tangent: %d CG)\n", chosen, tangent.linear_iterations);

@@ -790,7 +790,7 @@ SolveReport NonlinearSolver::tangent(const Vector& u0, Vector& trial, double ene
         x.update(1.0, d, 1.0);
         x.update(-1.0, *Extract::getConstTpetraVector(sol.getThyraRCPVector()), 1.0);
         const EvaluationTotals e = m.sys.evaluate(x, nullptr, nullptr);
-        if (e.undefined == 0 && std::isfinite(e.energy) && !(e.energy >= energy_to_beat)) {
+        if (e.energy_defined() && !(e.energy >= energy_to_beat)) {
           trial.assign(x);
           report.status = SolveStatus::Converged;
         }

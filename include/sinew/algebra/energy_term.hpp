@@ -19,6 +19,7 @@
 #include <Kokkos_Core.hpp>
 #include <Tpetra_CrsMatrix_decl.hpp>
 
+#include <cmath>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -41,6 +42,9 @@ struct EvaluationTotals {
   long long undefined = 0;  // points where the energy is +inf (Neo-Hookean, J <= 0)
   long long contacts = 0;   // contacts pressing (springs and collider touches with a positive force)
   double penetration = 0.0;  // deepest penetration among them (>= 0; distance behind the surface)
+
+  // A finite energy with no undefined point: a state a predictor may offer.
+  bool energy_defined() const { return undefined == 0 && std::isfinite(energy); }
 };
 
 enum class Backend { Default, Serial };

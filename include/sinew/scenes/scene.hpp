@@ -98,8 +98,8 @@ struct LoadingParameters {
              "each step's first guess: none: the last state with the new prescribed values (and a rig's skinning); "
              "extrapolate: or the linear extrapolation of the last two converged states when its energy is "
              "lower; tangent: the same, and where there is nothing to extrapolate from (the first step, from "
-             "rest or a checkpoint; not with contact) the linearised response of the body to the guess (one CG solve on the last "
-             "state's Hessian) when its energy is lower");
+             "rest or a checkpoint; not with contact) the linearised response of the body to the guess (one CG "
+             "solve on the last state's Hessian) when its energy is lower");
     v.entry("Maximum cuts", max_cuts, 6,
             "a step that fails is retried with half the load increment, at most this many times", Range::closed(0, 30));
   }

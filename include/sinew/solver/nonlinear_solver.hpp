@@ -118,12 +118,11 @@ class NonlinearSolver {
   // The tangent predictor of a load step: from the equilibrium u0 (of the last load), the linearised
   // response to trial (the step's guess: the new prescribed values, free nodes where a rig's skinning
   // put them or at u0). With d = trial - u0, trial becomes trial + du, K_ff(u0) du = -(f_f(u0) +
-  // K(u0) d), K the projected Hessian; one CG solve to 10 x 'Linear tolerance' on the solver's own preconditioner
-  // (which the step's Newton iterations then keep or update as usual). A boundary layer that a jump of
-  // the prescribed nodes would crush is spread over the body instead. Taken (status Converged)
-  // when its energy is defined and below energy_to_beat; otherwise trial is
-  // as it was. Counts CG iterations and times
-  // in the report (no Newton iterations).
+  // K(u0) d), K the projected Hessian; one CG solve to 10 x 'Linear tolerance' on the solver's own
+  // preconditioner (which the step's Newton iterations then update as usual). A boundary layer that a
+  // jump of the prescribed nodes would crush is spread over the body instead. Taken (status Converged)
+  // when its energy is defined and below energy_to_beat; otherwise trial is as it was. Counts CG
+  // iterations, preconditioner setups and times in the report (no Newton iterations).
   SolveReport tangent(const Vector& u0, Vector& trial, double energy_to_beat);
 
   double absolute_tolerance() const;
