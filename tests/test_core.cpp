@@ -332,6 +332,41 @@ TEST(HessianPolicy, EveryTransition) {
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
 }
 
+// Projected Newton near a crease converges linearly, so after a short exact step the exact Hessian is
+// tried again after 2, 4, 8, ... projected iterations even where the residual has not dropped ten-fold;
+// after a direction that does not descend only the ten-fold drop counts.
+TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProjectedIterations) {
+  HessianPolicy p(0.01, HessianPolicy::Inverted::Exact);
+  p.start(100.0);
+  const double r = 0.5;  // never ten times below a failure: only the count can bring the exact Hessian back
+  auto projected_before_exact = [&](int limit) {
+    int n = 0;
+    while (!p.next_jacobian(r, 0.0) && n < limit) ++n;
+    return n;
+  };
+  EXPECT_TRUE(p.next_jacobian(r, 0.0));
+  for (int wait : {2, 4, 8, 16}) {
+    p.step_taken(0.25);  // a short step
+    EXPECT_EQ(projected_before_exact(100), wait);
+    EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact);
+  }
+  p.line_search_failed();  // a failed line search counts as a short step: the fifth waits 32
+  EXPECT_EQ(projected_before_exact(100), 32);
+  p.direction_not_descent();  // not by count
+  EXPECT_EQ(projected_before_exact(1000), 1000);
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  EXPECT_TRUE(p.next_jacobian(0.04, 0.0));  // the ten-fold drop still does
+
+  p.start(100.0);  // a new solve waits 2 again
+  EXPECT_TRUE(p.next_jacobian(r, 0.0));
+  p.step_taken(0.125);
+  EXPECT_EQ(projected_before_exact(100), 2);
+  // The count never keeps a tangled state exact.
+  p.step_taken(0.125);
+  for (int k = 0; k < 4; ++k) p.next_jacobian(r, 0.0);
+  EXPECT_FALSE(p.next_jacobian(r, 0.2));
+}
+
 TEST(PreconditionerLag, EveryTransition) {
   int budget = -1;
   PreconditionerLag every(false, 1.5);  // 'every Newton iteration'

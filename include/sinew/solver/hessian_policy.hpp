@@ -11,14 +11,21 @@
 // projected); undefined points (Neo-Hookean, J <= 0) always do. Fall back to projection at the first
 // sign that the state is not yet in the quadratic region: a direction that does not descend, a step the
 // line search had to cut below 1/2, or a failed line search; try the exact Hessian again once projected
-// Newton has brought the residual ten times below where it failed (projected Newton near a crease
-// converges linearly: on the 48k-cell human, 0.92 per iteration for 40 iterations after one failed
-// exact step at |F| = 1.6). A failed solve is worth redoing with projection only when it used the exact
-// Hessian at all.
+// Newton has brought the residual ten times below where it failed, and after a short step or a failed
+// line search also after 2, 4, 8, ... projected iterations (the k-th such fall-back of the solve waits
+// 2^k), whichever comes first. Projected Newton near a crease converges linearly (on the 48k-cell
+// human's crouch, 0.88-0.92 per iteration), so the ten-fold drop alone cost 11-14 iterations after each
+// short exact step, although the exact Hessian tried again a few iterations later converged
+// quadratically (steps 5-9 of the crouch: 135 -> 112 Newton iterations). A direction that does not
+// descend (CG met negative curvature) waits for the ten-fold drop only: retried by count, the scramble's
+// indefinite exact Hessians cost a wasted iteration each (347 -> 352). A failed solve is worth redoing
+// with projection only when it used the exact Hessian at all.
 //
 //   Projected <--(small residual, nothing tangled)--> Exact --(bad direction or short step)--> FellBack
-//   FellBack --(residual 10x below the failure's)--> Exact
+//   FellBack --(residual 10x below the failure's, or after a short step 2^k projected iterations)--> Exact
 #pragma once
+
+#include <algorithm>
 
 namespace sinew {
 
@@ -46,7 +53,12 @@ class HessianPolicy {
     mode_ = Mode::Projected;
     exact_used_ = last_exact_ = fell_back_ = false;
     retry_below_ = 0.0;
+    short_falls_ = wait_ = projected_since_ = 0;
   }
+
+  // After the k-th short step or failed line search of a solve (k = 0, 1, ...), the exact Hessian is
+  // tried again after first_wait * 2^k projected Jacobians at the latest.
+  static constexpr int first_wait = 2;
 
   // The largest fraction of inverted points that still allows the exact Hessian (PerPoint, Exact).
   static constexpr double few = 0.01;
@@ -59,7 +71,9 @@ class HessianPolicy {
     const bool tangled =
         undefined || (inverted_ == Inverted::WholeMesh ? inverted_fraction > 0.0 : inverted_fraction > few);
     last_residual_ = residual;
-    if (mode_ == Mode::FellBack && residual < retry_below_) mode_ = Mode::Projected;  // far enough: may try again
+    if (mode_ == Mode::FellBack && (residual < retry_below_ || (wait_ > 0 && projected_since_ >= wait_)))
+      mode_ = Mode::Projected;  // far enough, or long enough: may try again
+    if (mode_ == Mode::FellBack) ++projected_since_;
     if (mode_ != Mode::FellBack)
       mode_ = exact_below_ > 0.0 && f0_ > 0.0 && residual < exact_below_ * f0_ && !tangled ? Mode::Exact : Mode::Projected;
     last_exact_ = mode_ == Mode::Exact;
@@ -68,21 +82,23 @@ class HessianPolicy {
   }
 
   // The line search's findings about a direction computed from the last Jacobian.
-  void direction_not_descent() { fall_back(); }
+  void direction_not_descent() { fall_back(false); }
   void step_taken(double step) {
-    if (step < 0.5) fall_back();
+    if (step < 0.5) fall_back(true);
   }
-  void line_search_failed() { fall_back(); }
+  void line_search_failed() { fall_back(true); }
 
   // Redo a failed solve with projection throughout?
   bool retry_projected() const { return exact_used_; }
 
  private:
-  void fall_back() {
+  void fall_back(bool counted) {
     if (!last_exact_) return;
     mode_ = Mode::FellBack;
     fell_back_ = true;
     retry_below_ = 0.1 * last_residual_;
+    wait_ = counted ? first_wait << std::min(short_falls_++, 20) : 0;
+    projected_since_ = 0;
   }
 
   double exact_below_;
@@ -90,6 +106,8 @@ class HessianPolicy {
   double f0_ = 0.0;
   Mode mode_ = Mode::Projected;
   bool exact_used_ = false, last_exact_ = false, fell_back_ = false;
+  // After a short step: FellBack for wait_ projected Jacobians at most (0: until retry_below_).
+  int short_falls_ = 0, wait_ = 0, projected_since_ = 0;
   double last_residual_ = 0.0, retry_below_ = 0.0;  // FellBack until the residual is below retry_below_
 };
 
