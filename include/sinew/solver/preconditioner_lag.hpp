@@ -15,7 +15,8 @@
 //    iteration each);
 //  - a kept solve over budget, or whose direction does not descend, is redone from the same state with an
 //    updated preconditioner (the line search steps 0), and nothing is kept again in that solve until the
-//    residual is ten times below where the kept one failed (as HessianPolicy's fall-back);
+//    residual is ten times below where the kept one failed (as HessianPolicy's fall-back after a direction
+//    that does not descend);
 //  - a kept solve within budget but slower than `factor` times the baseline's rate, a step the line
 //    search had to cut, or one that did not halve the residual (the state is where the quadratic model is
 //    poor and the Jacobian changes the most), has the next iteration update. The last matters beyond the
