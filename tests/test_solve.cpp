@@ -623,6 +623,52 @@ TEST(Solve, CorruptOrMismatchedCheckpointsAreNamedInputErrors) {
   EXPECT_NE(func, nullptr) << "HDF5 error reporting was left switched off";
 }
 
+TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostLinearly) {
+  // Projection throughout on a pi/2 twist at nu = 0.49: the clamped Hessian is stiffer than the energy
+  // along its directions, so full steps lower the energy by more than a quadratic's half of the slope
+  // and Newton converges linearly. 'Maximum step' lets the line search go on to the energy's minimum
+  // along the direction, up to that many Newton steps: fewer iterations, the same end state, and never
+  // a step beyond the cap (1: never beyond the Newton step).
+  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
+  struct Path {
+    int newton = 0;
+    double longest = 0.0;
+    std::vector<double> u;
+  };
+  auto solve = [&](double max_step) {
+    const std::string entries = R"x(<Parameter name="Exact Hessian below" type="double" value="0.0"/>
+        <Parameter name="Preconditioner update" type="string" value="every Newton iteration"/>
+        <Parameter name="Maximum step" type="double" value=")x" + std::to_string(max_step) + "\"/>";
+    SceneConfig c = config(std::regex_replace(twist_xml(1.5708, 1, "hex8", entries),
+                                              std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49),
+                           "test_results/solve_extend" + tag());
+    Scene scene(c.scene(), world());
+    NonlinearSolver solver(scene.system(), c.params.solver);
+    auto u = scene.system().create_vector();
+    u->putScalar(0.0);
+    scene.apply_load(1.0, *u);
+    Path p;
+    const SolveReport r = solver.solve(*u, [&](const NewtonIterate& it) { p.longest = std::max(p.longest, it.step); });
+    EXPECT_TRUE(r.converged()) << "Maximum step " << max_step << ": " << r.reason();
+    p.newton = r.newton_iterations;
+    p.u = gather(*u);
+    return p;
+  };
+  // The minimum along these directions lies near 1.45 Newton steps: a cap of 1.3 binds, 4 does not.
+  const Path newton = solve(1.0), capped = solve(1.3), free = solve(4.0);
+  EXPECT_EQ(newton.longest, 1.0);
+  EXPECT_GT(capped.longest, 1.0);
+  EXPECT_LE(capped.longest, 1.3);
+  EXPECT_GT(free.longest, 1.3);
+  EXPECT_LE(free.longest, 4.0);
+  EXPECT_LT(free.newton, newton.newton);
+  EXPECT_LT(capped.newton, newton.newton);
+  EXPECT_LT(rel_diff(newton.u, capped.u), 1e-7);
+  EXPECT_LT(rel_diff(newton.u, free.u), 1e-7);
+  std::printf("Newton iterations with Maximum step 1 / 1.3 / 4: %d / %d / %d (longest steps %.3g, %.3g)\n", newton.newton,
+              capped.newton, free.newton, capped.longest, free.longest);
+}
+
 TEST(Solve, NoxBacktrackSettingsGovernTheEnergyLineSearch) {
   // A 3.14 rad twist at nu = 0.49 needs a half step in its first Newton iteration (measured). With
   // NOX's own "Backtrack" list allowing one trial only, the energy line search must fail there.
