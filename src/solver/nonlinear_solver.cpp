@@ -323,7 +323,8 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   // kept if it lowers the energy further, up to max_step_ Newton steps ('Solver/Maximum step'); the
   // group is left at the best step, which is returned. Measured against 1 (no extension), every
   // shipped scene the same or fewer Newton iterations with a cap of 2: scramble 350 -> 201, drop 48 ->
-  // 38, squash 1,535 -> 1,502, arm with contact 176 -> 167, crouch steps 5-9 110 -> 92. Tried first with
+  // 38, squash 1,535 -> 1,502, arm with contact 176 -> 167, crouch steps 5-9 110 -> 92, the 30^3 twist's
+  // second step 160 -> 51, the corotational human's fourth 43 -> 27. Tried first with
   // trials only past 1.5 steps: caps of 2, 4, 8 and 32 gave the scramble 222, 268, 365 and 387 Newton
   // iterations (long steps from a tangle undo too much), the other scenes alike.
   double extend(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir, double t1,

@@ -44,8 +44,8 @@ struct SolverParameters {
                                   {"full-step", "Full Step"}},
              "line search along each Newton direction (backtrack: on the energy, with NOX's Backtrack settings)");
     // Default 2, measured against 1 (nonlinear_solver.cpp, EnergyBacktrack::extend): scramble 350 -> 201
-    // Newton iterations, drop 48 -> 38, squash 1,535 -> 1,502, the crouch's steps 5-9 110 -> 92, no shipped
-    // scene more.
+    // Newton iterations, drop 48 -> 38, squash 1,535 -> 1,502, the crouch's steps 5-9 110 -> 92, the 30^3
+    // twist's second step 160 -> 51, the corotational human's fourth 43 -> 27; no shipped scene more.
     v.entry("Maximum step", max_step, 2.0,
             "longest step along a Newton direction, in Newton steps, that the energy line search (backtrack, "
             "merit energy) tries when the full step lowers the energy by more than a quadratic would (the "
