@@ -7,6 +7,7 @@
 #include <sinew/core/parameters.hpp>
 #include <sinew/core/validation.hpp>
 #include <sinew/core/xml_input.hpp>
+#include <sinew/solver/forcing.hpp>
 #include <sinew/solver/hessian_policy.hpp>
 #include <sinew/solver/preconditioner_lag.hpp>
 
@@ -365,6 +366,26 @@ TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProje
   p.step_taken(0.125);
   for (int k = 0; k < 4; ++k) p.next_jacobian(r, 0.0);
   EXPECT_FALSE(p.next_jacobian(r, 0.2));
+}
+
+// forcing.hpp: the 969k stretch's third Newton iteration (|F| 1.48, eta 1e-2, threshold 1e-2) is asked
+// for half the threshold; far from it, past it, or below the floor the forcing term stands or is floored.
+TEST(FinishingTolerance, SolvesToHalfTheThresholdWithinOneDigitOfIt) {
+  const double floor = 1e-4;
+  EXPECT_NEAR(finishing_tolerance(1e-2, 1.48, 1e-2, floor), 0.5 * 1e-2 / 1.48, 1e-15);
+  // eta |F| already below half the threshold: nothing to tighten.
+  EXPECT_EQ(finishing_tolerance(1e-2, 0.4, 1e-2, floor), 1e-2);
+  // eta |F| = threshold: half of it is one tightening within the digit.
+  EXPECT_EQ(finishing_tolerance(1e-2, 1.0, 1e-2, floor), 5e-3);
+  // More than a digit away (|F| = 1,000 x threshold would need 5e-4 against eta = 1e-2): the quadratic
+  // term dominates there, eta stands.
+  EXPECT_EQ(finishing_tolerance(1e-2, 10.0, 1e-2, floor), 1e-2);
+  EXPECT_EQ(finishing_tolerance(1e-2, 100.0, 1e-2, floor), 1e-2);
+  // Within the digit but below the floor: the floor.
+  EXPECT_EQ(finishing_tolerance(1e-3, 2.0, 1e-3, 5e-4), 5e-4);
+  // Nothing to end on (the predictor's solve) or nothing measured yet: eta stands.
+  EXPECT_EQ(finishing_tolerance(1e-2, 1.48, 0.0, floor), 1e-2);
+  EXPECT_EQ(finishing_tolerance(1e-2, 0.0, 1e-2, floor), 1e-2);
 }
 
 TEST(PreconditionerLag, EveryTransition) {

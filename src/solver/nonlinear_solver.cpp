@@ -5,6 +5,7 @@
 #include <sinew/core/errors.hpp>
 #include <sinew/core/memory.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
+#include <sinew/solver/forcing.hpp>
 #include <sinew/solver/preconditioner_lag.hpp>
 
 #include <NOX.H>
@@ -52,7 +53,16 @@ struct SolveState {
 
   HessianPolicy policy;
   PreconditionerLag* lag = nullptr;           // the solver's, kept across solves with its preconditioner
-  const Teuchos::ParameterList* nox = nullptr;  // the solve's NOX parameters (each linear tolerance)
+  Teuchos::ParameterList* nox = nullptr;  // the solve's NOX parameters (each linear tolerance)
+  // Tightens the coming linear solve's tolerance as finishing_tolerance says, when this Jacobian is exact.
+  void finish_tolerance() const {
+    if (!nox || !(threshold > 0.0) || !policy.last_exact()) return;
+    auto& ls = nox->sublist("Direction").sublist("Newton").sublist("Linear Solver");
+    if (!ls.isParameter("Tolerance")) return;
+    const double eta = ls.get<double>("Tolerance");
+    const double tightened = finishing_tolerance(eta, last_f_norm, threshold, tolerance_floor);
+    if (tightened < eta) ls.set("Tolerance", tightened);
+  }
   EvaluationTotals last;     // the most recent evaluation
   double last_f_norm = 0.0;  // |F| of the most recent residual evaluation
   double seconds_assembly = 0.0;
@@ -60,6 +70,9 @@ struct SolveState {
   // Jacobian's evaluation puts the linearised force f + K d.
   const Vector* lift = nullptr;
   Vector* lifted_force = nullptr;
+  // The |F| that ends the solve (0: none, as in the tangent predictor) and the forcing term's minimum:
+  // an exact Jacobian's linear tolerance is tightened to end the solve where it can (forcing.hpp).
+  double threshold = 0.0, tolerance_floor = 0.0;
 };
 
 // The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
@@ -83,6 +96,7 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     // Belos re-reads its solver's parameters at every initialization: the budget applies to this solve.
     int budget = max_iterations_;
     const SolveState& s = state_();
+    s.finish_tolerance();
     const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget);
     // Fault injection for the tests of the redo path: a CG budget that no kept solve meets.
     if (const char* forced = std::getenv("SINEW_KEPT_CG_BUDGET"); forced && !update) budget = std::atoi(forced);
@@ -741,6 +755,8 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     tests->addStatusTest(maxiters);
 
     state.nox = params.get();  // NOX's Newton direction writes each linear solve's tolerance there
+    state.threshold = std::max(p.absolute_tolerance, p.relative_tolerance * report.initial_residual);
+    state.tolerance_floor = p.linear_tolerance;
     m.lag.start();
     auto solver = NOX::Solver::buildSolver(group, tests, params);
     const NOX::StatusTest::StatusType status = solver->solve();

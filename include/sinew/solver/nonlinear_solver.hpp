@@ -67,7 +67,8 @@ struct SolverParameters {
     v.choice("Forcing term", forcing, std::string("Type 2"),
              Choices<std::string>{{"constant", "Constant"}, {"type 1", "Type 1"}, {"type 2", "Type 2"}},
              "CG tolerance per Newton step: constant ('Linear tolerance'), or Eisenstat-Walker type 1 or 2 (0.01 "
-             "while the residual falls slowly, down to 'Linear tolerance' as Newton converges)");
+             "while the residual falls slowly, down to 'Linear tolerance' as Newton converges; an exact-Hessian step "
+             "that would stop CG within a digit above the convergence threshold solves to half the threshold)");
     v.choice("Preconditioner", preconditioner, std::string("MueLu"),
              Choices<std::string>{{"muelu", "MueLu"}, {"none", "None"}}, "CG preconditioner");
     v.choice("Near-null space", near_null_space, std::string("reference"),
