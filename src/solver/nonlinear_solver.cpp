@@ -46,9 +46,12 @@ struct SolveState {
   // The relative tolerance NOX's forcing term asks of the coming (or the last) linear solve: its Newton
   // direction writes it into its parameters before each solve.
   double linear_tolerance() const {
-    if (!nox) return 1e-4;
-    const auto& ls = nox->sublist("Direction").sublist("Newton").sublist("Linear Solver");
-    return ls.isParameter("Tolerance") ? ls.get<double>("Tolerance") : 1e-4;
+    const Teuchos::ParameterList* ls = linear_solver();
+    return ls && ls->isParameter("Tolerance") ? ls->get<double>("Tolerance") : 1e-4;
+  }
+  // Where that tolerance is written (null without NOX parameters).
+  Teuchos::ParameterList* linear_solver() const {
+    return nox ? &nox->sublist("Direction").sublist("Newton").sublist("Linear Solver") : nullptr;
   }
 
   HessianPolicy policy;
@@ -56,12 +59,11 @@ struct SolveState {
   Teuchos::ParameterList* nox = nullptr;  // the solve's NOX parameters (each linear tolerance)
   // Tightens the coming linear solve's tolerance as finishing_tolerance says, when this Jacobian is exact.
   void finish_tolerance() const {
-    if (!nox || !(threshold > 0.0) || !policy.last_exact()) return;
-    auto& ls = nox->sublist("Direction").sublist("Newton").sublist("Linear Solver");
-    if (!ls.isParameter("Tolerance")) return;
-    const double eta = ls.get<double>("Tolerance");
+    Teuchos::ParameterList* ls = linear_solver();
+    if (!ls || !ls->isParameter("Tolerance") || !(threshold > 0.0) || !policy.last_exact()) return;
+    const double eta = ls->get<double>("Tolerance");
     const double tightened = finishing_tolerance(eta, last_f_norm, threshold, tolerance_floor);
-    if (tightened < eta) ls.set("Tolerance", tightened);
+    if (tightened < eta) ls->set("Tolerance", tightened);
   }
   EvaluationTotals last;     // the most recent evaluation
   double last_f_norm = 0.0;  // |F| of the most recent residual evaluation
