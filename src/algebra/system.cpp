@@ -343,6 +343,73 @@ void System::element_fields(const Vector& u, std::vector<double>& psi, std::vect
   J.assign(jh.data(), jh.data() + jh.extent(0));
 }
 
+NodeRelaxationTotals System::relax_nodes(Vector& u, const Vector& force, double share, int rings,
+                                         const NodeRelaxationSettings& settings) const {
+  NodeRelaxationTotals done;
+  // Contact and inertia are not linear in a node's displacement: their share of the gradient cannot be
+  // frozen. The external-force term's can (it is linear).
+  if (terms_.size() != 2 || !(share > 0.0) || !Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible)
+    return done;
+  const double f2 = force.norm2() * force.norm2();
+  if (!(f2 > 0.0) || !std::isfinite(f2)) return done;
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  auto f = force.getLocalViewHost(Tpetra::Access::ReadOnly);
+  auto fixed = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fixed_);
+  auto free_node = [&](std::size_t n) { return n < n_owned && !fixed(3 * n) && !fixed(3 * n + 1) && !fixed(3 * n + 2); };
+  auto force2 = [&](std::size_t n) { return f(3 * n, 0) * f(3 * n, 0) + f(3 * n + 1, 0) * f(3 * n + 1, 0) + f(3 * n + 2, 0) * f(3 * n + 2, 0); };
+  std::vector<int> nodes;
+  std::vector<char> picked(n_local, 0);
+  for (std::size_t n = 0; n < n_owned; ++n)
+    if (free_node(n) && force2(n) >= share * f2) {
+      nodes.push_back(static_cast<int>(n));
+      picked[n] = 1;
+    }
+  int mine = nodes.empty() ? 0 : 1, any = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(any));
+  if (!any) return done;
+  // The largest forces first, then the rings around them (their neighbours take up what they shed).
+  std::sort(nodes.begin(), nodes.end(), [&](int a, int b) { return force2(a) > force2(b); });
+  const int npe = nodes_per_element(mesh_.type);
+  for (int r = 0; r < rings; ++r) {
+    std::vector<int> ring;
+    for (std::size_t e = 0; e < mesh_.local_elements(); ++e) {
+      bool touches = false;
+      for (int a = 0; a < npe && !touches; ++a) touches = picked[mesh_.conn(e, a)] == 1;
+      if (!touches) continue;
+      for (int a = 0; a < npe; ++a) {
+        const int m = mesh_.conn(e, a);
+        if (!picked[m] && free_node(m)) {
+          picked[m] = 2;
+          ring.push_back(m);
+        }
+      }
+    }
+    for (int m : ring) picked[m] = 1;
+    nodes.insert(nodes.end(), ring.begin(), ring.end());
+  }
+  u_columns_->doImport(u, *column_importer_, Tpetra::INSERT);
+  std::vector<double> local(3 * n_local);
+  {
+    auto c = u_columns_->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t d = 0; d < 3 * n_local; ++d) local[d] = c(d, 0);
+  }
+  std::vector<double> rows(3 * nodes.size());
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+    for (int i = 0; i < 3; ++i) rows[3 * k + i] = f(3 * nodes[k] + i, 0);
+  if (!nodes.empty()) done = elastic_->relax(local, nodes, rows, settings);
+  {
+    auto v = u.getLocalViewHost(Tpetra::Access::ReadWrite);
+    for (int n : nodes)
+      for (int i = 0; i < 3; ++i) v(3 * n + i, 0) = local[3 * n + i];
+  }
+  const long long counts[2] = {done.nodes, done.iterations};
+  long long gcounts[2];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 2, counts, gcounts);
+  double decrease = 0.0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, done.decrease, Teuchos::outArg(decrease));
+  return NodeRelaxationTotals{gcounts[0], gcounts[1], decrease};
+}
+
 void System::gradient(const Vector& u, Vector& force, const EnergyTerm* only) const {
   run(u, &force, nullptr, Backend::Default, std::nullopt, {}, only, false);
 }

@@ -314,9 +314,11 @@ void Simulation::print_step(const StepRecord& rec) const {
   if (!talk_) return;
   // Newton iterations redone because a kept preconditioner had aged (PreconditionerLag).
   const std::string redone = rec.solve.redone_iterations > 0 ? ", " + std::to_string(rec.solve.redone_iterations) + " redone" : "";
-  std::printf("  converged: %d Newton, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
+  // Nodes the relaxation after Newton steps moved ('Solver/Node relaxation').
+  const std::string relaxed = rec.solve.relaxed_nodes > 0 ? " (" + std::to_string(rec.solve.relaxed_nodes) + " nodes relaxed)" : "";
+  std::printf("  converged: %d Newton%s, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
               "%.2f s (assembly %.2f, preconditioner %.2f in %d update%s%s, CG %.2f, line search %.2f%s)\n",
-              rec.solve.newton_iterations, rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0), rec.totals.min_J,
+              rec.solve.newton_iterations, relaxed.c_str(), rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0), rec.totals.min_J,
               rec.totals.inverted, rec.solve.seconds_total + rec.seconds_contact, rec.solve.seconds_assembly,
               rec.solve.seconds_preconditioner, rec.solve.preconditioner_updates, rec.solve.preconditioner_updates == 1 ? "" : "s",
               redone.c_str(), rec.solve.seconds_linear, rec.solve.seconds_line_search,

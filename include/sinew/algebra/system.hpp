@@ -7,6 +7,7 @@
 #pragma once
 
 #include <sinew/algebra/energy_term.hpp>
+#include <sinew/algebra/node_relaxation.hpp>
 #include <sinew/discretization/elements.hpp>
 #include <sinew/discretization/mesh.hpp>
 #include <sinew/materials/models.hpp>
@@ -103,6 +104,15 @@ class System {
   // prescribed rows are the reactions, and one term's part is the force that term exerts (e.g. the
   // contact force on a body).
   void gradient(const Vector& u, Vector& force, const EnergyTerm* only = nullptr) const;
+
+  // Nonlinear elimination of the residual's hot spots (ElasticTerm::relax): the owned nodes free in all
+  // three components whose force holds at least `share` of |force|^2 (and up to `rings` element rings of
+  // free owned nodes around them) are relaxed one by one, the rest held; u (owned DOFs) is updated.
+  // Only for a total energy of the elastic and external-force terms (the others are not linear in a
+  // node's displacement, and are left to Newton): returns zero totals otherwise. Collective; the
+  // caller checks the new state's energy (nodes moved at once on two ranks may share an element).
+  NodeRelaxationTotals relax_nodes(Vector& u, const Vector& force, double share, int rings,
+                                   const NodeRelaxationSettings& settings) const;
 
   // Per owned element: volume-averaged energy density and J at u.
   void element_fields(const Vector& u, std::vector<double>& psi, std::vector<double>& J) const;

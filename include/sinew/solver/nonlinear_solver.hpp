@@ -25,7 +25,7 @@ struct SolverParameters {
   int max_iterations = 0;
   std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
   std::string near_null_space, rebuild, update, inverted;
-  double rebuild_factor = 0.0, update_factor = 0.0, max_step = 0.0;
+  double rebuild_factor = 0.0, update_factor = 0.0, max_step = 0.0, node_relaxation = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
 
@@ -53,6 +53,18 @@ struct SolverParameters {
             "inverted or strongly compressed points): the step goes on to the energy's minimum along the "
             "direction, up to this (1: never beyond the Newton step)",
             Range::closed(1.0, 1e3));
+    // Default 0.02, measured against 0 (System::relax_nodes; docs/performance.md), same end states:
+    // the 48k-cell human's crouch 119-122 -> 95 Newton iterations (135-151 -> 108-110 s), its 4-step
+    // start 19 -> 16, rig mocap 53 -> 40, twist 28 -> 24, scramble 201 -> 170, voxel arm 78 -> 71,
+    // arm 77 -> 76 (CG 591 -> 683), stretch 36 -> 36.
+    v.entry("Node relaxation", node_relaxation, 0.02,
+            "after each step the energy line search accepts (Line search backtrack, merit energy), the free nodes whose force holds at least this share of |F|^2, "
+            "and their neighbours, are moved one at a time to lower the energy of their elements, the rest "
+            "held (a nonlinear Gauss-Seidel pass; kept when the total energy falls): the few nodes that hold "
+            "a residual near a crease no longer cut every Newton step. Not with contact or inertia, not next to "
+            "an inverted point, never inverting one, and not while more than 0.1% of the points are inverted "
+            "(0: off)",
+            Range::closed_open(0.0, 1.0));
     v.choice("Line search merit", merit, std::string("energy"),
              Choices<std::string>{{"energy", "energy"}, {"residual", "residual"}},
              "what the line search decreases: the total energy, or 0.5 |F|^2");

@@ -35,6 +35,7 @@ struct SolveReport {
   int linear_iterations = 0;  // CG iterations summed over the Newton iterations
   int preconditioner_updates = 0;  // Newton iterations whose preconditioner was set up or updated
   int redone_iterations = 0;       // ... redone because a kept preconditioner failed (PreconditionerLag)
+  long long relaxed_nodes = 0;     // nodes moved by the node relaxations kept ('Solver/Node relaxation')
   double initial_residual = 0.0, final_residual = 0.0;
   double seconds_assembly = 0.0, seconds_preconditioner = 0.0, seconds_linear = 0.0, seconds_line_search = 0.0,
          seconds_total = 0.0;
@@ -63,6 +64,7 @@ struct SolveReport {
     linear_iterations += r.linear_iterations;
     preconditioner_updates += r.preconditioner_updates;
     redone_iterations += r.redone_iterations;
+    relaxed_nodes += r.relaxed_nodes;
     seconds_assembly += r.seconds_assembly;
     seconds_preconditioner += r.seconds_preconditioner;
     seconds_linear += r.seconds_linear;

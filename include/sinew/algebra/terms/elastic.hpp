@@ -5,6 +5,7 @@
 #pragma once
 
 #include <sinew/algebra/energy_term.hpp>
+#include <sinew/algebra/node_relaxation.hpp>
 #include <sinew/discretization/elements.hpp>
 #include <sinew/materials/models.hpp>
 
@@ -14,6 +15,7 @@
 namespace sinew {
 
 struct MaterialAssignment;
+
 
 class ElasticTerm final : public EnergyTerm {
  public:
@@ -32,6 +34,12 @@ class ElasticTerm final : public EnergyTerm {
   std::vector<double> element_density() const;
   // Owned elements per region, in the order the regions were given (not the default law's block).
   std::vector<long long> owned_region_elements() const;
+  // Moves each of `nodes` (local ids whose elements are all on this rank) in turn to lower the energy of
+  // its elements plus the rest of the energy, linearised: `force` holds the total gradient at each node
+  // (3 per node, in the order of `nodes`) at the start. u holds the displacements of the local nodes
+  // (3 per node) and is updated. Host memory only (returns nothing done otherwise).
+  NodeRelaxationTotals relax(std::vector<double>& u, const std::vector<int>& nodes, const std::vector<double>& force,
+                             const NodeRelaxationSettings& settings) const;
 
  private:
   struct Block {
