@@ -1,8 +1,8 @@
 // ElasticTerm::relax: nonlinear Gauss-Seidel on a few nodes (terms/elastic.hpp, System::relax_nodes).
 //
 // Near the 48k-cell human's creases (issue 25) the residual of a Newton iterate sits on a handful of
-// nodes: in step 5 of the crouch the five largest nodal forces held 75-94% of |F|^2 in every iteration,
-// on surface nodes that belong to one to five elements, and the Newton direction moved one of them by
+// nodes: in step 5 of the crouch the five largest nodal forces held 50-94% of |F|^2 in every iteration,
+// on surface nodes that belong to one to seven elements, and the Newton direction moved one of them by
 // up to 5 cm while the 99.9th percentile of the nodes moved 1.6 mm, so the line search cut the whole
 // step to 1/4 for them and the exact Hessian fell back. A nonlinear elimination (Cai and Keyes, SISC
 // 2002: solve the local nonlinearity before the global Newton step) here is a few damped Newton
@@ -33,10 +33,10 @@ struct PatchEvaluator {
   Kokkos::View<const int**, DeviceMemory> conn;
   const std::vector<MaterialSpec>* laws;
 
-  // Energy of the patch at u (overlap DOFs), the node's gradient g and its 3x3 Hessian block H (the
-  // exact Hessian when `exact`, else each point's projection); false where the energy is undefined.
-  bool operator()(const std::vector<double>& u, const Patch& p, bool want, bool exact, double& E, double g[3],
-                  double H[3][3], long long* inverted = nullptr) const {
+  // Energy of the patch at u (overlap DOFs) and, when `want`, the node's gradient g and its exact 3x3
+  // Hessian block H; false where the energy is undefined.
+  bool operator()(const std::vector<double>& u, const Patch& p, bool want, double& E, double g[3], double H[3][3],
+                  long long* inverted = nullptr) const {
     E = 0.0;
     if (inverted) *inverted = 0;
     for (int i = 0; i < 3; ++i) {
@@ -51,8 +51,7 @@ struct PatchEvaluator {
       const MaterialSpec& law = (*laws)[p.block[k]];
       ElementResult<Element> r;
       with_material(law, [&](auto model) {
-        const Projection proj = exact ? Projection::None : (law.projection == Projection::None ? Projection::Clamp : law.projection);
-        compute_element<Element>(model, proj, geometry, e, ue, want, want, r, law.mean_dilatation);
+        compute_element<Element>(model, Projection::None, geometry, e, ue, want, want, r, law.mean_dilatation);
       });
       if (r.totals.undefined > 0 || !std::isfinite(r.totals.energy)) return false;
       if (inverted) *inverted += r.totals.inverted;
@@ -111,11 +110,11 @@ NodeRelaxationTotals relax_with(const Mesh& mesh, const ElementData& ed, const s
   // node's own minimum next to inverted elements can be a tangled one (a scrambled 4^3 cube relaxed
   // there ended with one inverted point and -3.6% volume instead of back at rest).
   std::vector<double> bias(3 * nodes.size());
-  std::vector<char> skip(nodes.size(), 0);
+  std::vector<char> skip(nodes.size(), 0), moved(nodes.size(), 0);
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     double E, g[3], H[3][3];
     long long inverted = 0;
-    if (!eval(u, patches[k], true, false, E, g, H, &inverted) || inverted > 0) skip[k] = 1;
+    if (!eval(u, patches[k], true, E, g, H, &inverted) || inverted > 0) skip[k] = 1;
     for (int i = 0; i < 3; ++i) bias[3 * k + i] = force[3 * k + i] - g[i];
   }
   for (int sweep = 0; sweep < s.sweeps; ++sweep)
@@ -126,7 +125,7 @@ NodeRelaxationTotals relax_with(const Mesh& mesh, const ElementData& ed, const s
       double g0 = -1.0;
       for (int it = 0; it < s.iterations; ++it) {
         double E0, g[3], H[3][3];
-        if (!eval(u, p, true, s.exact, E0, g, H)) break;
+        if (!eval(u, p, true, E0, g, H)) break;
         for (int i = 0; i < 3; ++i) g[i] += bias[3 * k + i];
         const double gn = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         if (g0 < 0.0) g0 = gn;
@@ -142,7 +141,7 @@ NodeRelaxationTotals relax_with(const Mesh& mesh, const ElementData& ed, const s
           double E1, gg[3], HH[3][3];
           long long inverted = 0;
           const double bias_work = step * (bias[3 * k] * d[0] + bias[3 * k + 1] * d[1] + bias[3 * k + 2] * d[2]);
-          if (eval(u, p, false, false, E1, gg, HH, &inverted) && inverted == 0 && E1 + bias_work <= E0 + 1e-4 * step * slope) {
+          if (eval(u, p, false, E1, gg, HH, &inverted) && inverted == 0 && E1 + bias_work <= E0 + 1e-4 * step * slope) {
             accepted = true;
             t.decrease += E0 - E1 - bias_work;
             break;
@@ -153,9 +152,10 @@ NodeRelaxationTotals relax_with(const Mesh& mesh, const ElementData& ed, const s
           for (int i = 0; i < 3; ++i) x[i] = x0[i];
           break;
         }
-        if (it == 0 && sweep == 0) ++t.nodes;
+        moved[k] = 1;
       }
     }
+  t.nodes = std::count(moved.begin(), moved.end(), 1);
   return t;
 }
 

@@ -203,9 +203,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     if (t.nodes == 0) return;
     grp.setX(*x);
     grp.computeF();
-    const bool kept = std::isfinite(s.last.energy) && s.last.undefined == 0 && s.last.energy < E0;
-    if (kept) s.relaxed_nodes += t.nodes;
-    if (!kept) {
+    if (std::isfinite(s.last.energy) && s.last.undefined == 0 && s.last.energy < E0) {
+      s.relaxed_nodes += t.nodes;
+    } else {
       grp.setX(*old);
       grp.computeF();
     }

@@ -9,7 +9,6 @@ struct NodeRelaxationSettings {
   int iterations = 8;        // damped Newton iterations per node and pass, at most
   double reduction = 0.05;   // a node is done when its force fell by this factor within the pass
   double tolerance = 0.0;    // ... or below this (absolute)
-  bool exact = true;         // the node's exact 3x3 Hessian block (a negative eigenvalue by magnitude)
 };
 struct NodeRelaxationTotals {
   long long nodes = 0;       // nodes moved

@@ -58,12 +58,12 @@ struct SolverParameters {
     // start 19 -> 16, rig mocap 53 -> 40, twist 28 -> 24, scramble 201 -> 170, voxel arm 78 -> 71,
     // arm 77 -> 76 (CG 591 -> 683), stretch 36 -> 36.
     v.entry("Node relaxation", node_relaxation, 0.02,
-            "after each step the energy line search accepts (Line search backtrack, merit energy), the free nodes whose force holds at least this share of |F|^2, "
-            "and their neighbours, are moved one at a time to lower the energy of their elements, the rest "
-            "held (a nonlinear Gauss-Seidel pass; kept when the total energy falls): the few nodes that hold "
-            "a residual near a crease no longer cut every Newton step. Not with contact or inertia, not next to "
-            "an inverted point, never inverting one, and not while more than 0.1% of the points are inverted "
-            "(0: off)",
+            "after each step the energy line search accepts (Line search backtrack, merit energy), the free "
+            "nodes whose force holds at least this share of |F|^2, and their neighbours, are moved one at a "
+            "time to lower the energy of their elements, the rest held (a nonlinear Gauss-Seidel pass; kept "
+            "when the total energy falls): the few nodes that hold a residual near a crease no longer cut "
+            "every Newton step. Not with contact or inertia, not next to an inverted point, never inverting "
+            "one, and not while more than 0.1% of the points are inverted (0: off)",
             Range::closed_open(0.0, 1.0));
     v.choice("Line search merit", merit, std::string("energy"),
              Choices<std::string>{{"energy", "energy"}, {"residual", "residual"}},

@@ -16,7 +16,6 @@ namespace sinew {
 
 struct MaterialAssignment;
 
-
 class ElasticTerm final : public EnergyTerm {
  public:
   // Throws InputError when a region of `materials` is not an element group of the mesh. Holds
