@@ -353,10 +353,15 @@ TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProje
   }
   p.line_search_failed();  // a failed line search counts as a short step: the fifth waits 32
   EXPECT_EQ(projected_before_exact(100), 32);
-  p.direction_not_descent();  // not by count
-  EXPECT_EQ(projected_before_exact(1000), 1000);
+  // A direction that does not descend at a state with inverted points: not by count.
+  EXPECT_TRUE(p.next_jacobian(r, 0.001));
+  p.direction_not_descent();
+  EXPECT_FALSE(p.saddle());
+  int n = 0;
+  while (!p.next_jacobian(r, 0.001) && n < 1000) ++n;
+  EXPECT_EQ(n, 1000);
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
-  EXPECT_TRUE(p.next_jacobian(0.04, 0.0));  // the ten-fold drop still does
+  EXPECT_TRUE(p.next_jacobian(0.04, 0.001));  // the ten-fold drop still does
 
   p.start(100.0);  // a new solve waits 2 again
   EXPECT_TRUE(p.next_jacobian(r, 0.0));
@@ -366,6 +371,38 @@ TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProje
   p.step_taken(0.125);
   for (int k = 0; k < 4; ++k) p.next_jacobian(r, 0.0);
   EXPECT_FALSE(p.next_jacobian(r, 0.2));
+}
+
+// A direction that does not descend where no point is inverted is a saddle of the energy: projected
+// Newton slides off it, so the exact Hessian is tried again after 4, 8, 16, ... projected iterations, on
+// a count of its own (short steps keep theirs), and the solve remembers the saddle for the line search.
+TEST(HessianPolicy, AfterASaddleTriesAgainAfterFourThenEightProjectedIterations) {
+  HessianPolicy p(0.01, HessianPolicy::Inverted::PerPoint);
+  p.start(100.0);
+  const double r = 0.5;
+  auto projected_before_exact = [&](int limit) {
+    int n = 0;
+    while (!p.next_jacobian(r, 0.0) && n < limit) ++n;
+    return n;
+  };
+  EXPECT_TRUE(p.next_jacobian(r, 0.0));
+  EXPECT_FALSE(p.saddle());
+  for (int wait : {HessianPolicy::saddle_wait, 2 * HessianPolicy::saddle_wait}) {
+    p.direction_not_descent();
+    EXPECT_TRUE(p.saddle());
+    EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+    EXPECT_EQ(projected_before_exact(100), wait);
+  }
+  p.step_taken(0.25);  // the first short step of the solve still waits 2
+  EXPECT_EQ(projected_before_exact(100), HessianPolicy::first_wait);
+  p.direction_not_descent();  // the third saddle 16
+  EXPECT_EQ(projected_before_exact(100), 4 * HessianPolicy::saddle_wait);
+  // A projected direction that does not descend is no saddle of the exact Hessian's.
+  p.start(100.0);
+  EXPECT_FALSE(p.next_jacobian(50.0, 0.0));
+  p.direction_not_descent();
+  EXPECT_FALSE(p.saddle());
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
 }
 
 // forcing.hpp: the 969k stretch's third Newton iteration (|F| 1.48, eta 1e-2, threshold 1e-2) is asked

@@ -383,9 +383,14 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
                 double E0, double slope, double E1) const {
     const SolveState& state = model_.state();
     double best = t1, Ebest = E1, evaluated = t1;
+    // Sliding off a saddle (HessianPolicy::saddle(), nothing inverted) the energy keeps falling along
+    // the projected directions beyond any cap, and steps capped at 2 let the slide take 30 iterations of
+    // growing residual on the corotational human's fourth step (10 at 4 times the cap; that step 92 -> 49
+    // Newton iterations with this alone). Not near inverted points: there long steps undo too much.
+    const double cap = state.policy.saddle() && state.last.inverted == 0 ? saddle_factor * max_step_ : max_step_;
     for (int k = 0; k < max_extensions; ++k) {
       const double c = (Ebest - E0 - slope * best) / (best * best);
-      const double next = std::min(max_step_, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);
+      const double next = std::min(cap, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);
       if (!(next > extend_beyond * best)) break;
       grp.computeX(old, dir, next);
       grp.computeF();
@@ -407,6 +412,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   // at most this many longer trials per line search.
   static constexpr double extend_beyond = 1.25;
   static constexpr int max_extensions = 3;
+  static constexpr double saddle_factor = 4.0;
 
   const ElasticModel& model_;
   int max_iters_;

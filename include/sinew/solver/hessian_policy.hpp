@@ -17,12 +17,19 @@
 // human's crouch, 0.88-0.92 per iteration), so the ten-fold drop alone cost 11-14 iterations after each
 // short exact step, although the exact Hessian tried again a few iterations later converged
 // quadratically (steps 5-9 of the crouch: 135 -> 112 Newton iterations). A direction that does not
-// descend (CG met negative curvature) waits for the ten-fold drop only: retried by count, the scramble's
-// indefinite exact Hessians cost a wasted iteration each (347 -> 352). A failed solve is worth redoing
-// with projection only when it used the exact Hessian at all.
+// descend (CG met negative curvature) at a state with inverted points waits for the ten-fold drop only:
+// retried by count, the scramble's indefinite exact Hessians cost a wasted iteration each (347 -> 352).
+// At a state with none it means a saddle of the energy (the flesh pinched between bones buckles): the
+// projected steps then slide off it, the residual growing for a while, and the ten-fold drop below the
+// saddle's residual may take tens of iterations after the slide (the corotational human's fourth step:
+// 50 iterations without converging, then 42 more with projection only), so there the exact Hessian is
+// tried again after 4, 8, 16, ... projected iterations (`saddle_wait`), and `saddle()` tells the line
+// search it may step further along a direction that keeps descending (EnergyBacktrack). A failed solve
+// is worth redoing with projection only when it used the exact Hessian at all.
 //
 //   Projected <--(small residual, nothing tangled)--> Exact --(bad direction or short step)--> FellBack
-//   FellBack --(residual 10x below the failure's, or after a short step 2^k projected iterations)--> Exact
+//   FellBack --(residual 10x below the failure's, or after a short step 2^k projected iterations, or
+//               after a saddle 4 x 2^k)--> Exact
 #pragma once
 
 #include <algorithm>
@@ -46,6 +53,8 @@ class HessianPolicy {
   bool last_exact() const { return last_exact_; }
   // Whether this solve fell back from the exact Hessian at least once (it may have tried it again since).
   bool fell_back() const { return fell_back_; }
+  // Whether an exact direction of this solve did not descend at a state with no inverted point.
+  bool saddle() const { return saddle_; }
 
   // A new solve whose first residual is `initial_residual`.
   void start(double initial_residual) {
@@ -53,12 +62,17 @@ class HessianPolicy {
     mode_ = Mode::Projected;
     exact_used_ = last_exact_ = fell_back_ = false;
     retry_below_ = 0.0;
-    short_falls_ = wait_ = projected_since_ = 0;
+    saddle_ = false;
+    short_falls_ = saddle_falls_ = wait_ = projected_since_ = 0;
   }
 
   // After the k-th short step or failed line search of a solve (k = 0, 1, ...), the exact Hessian is
   // tried again after first_wait * 2^k projected Jacobians at the latest.
   static constexpr int first_wait = 2;
+  // After the k-th direction that did not descend at a state with no inverted point (a saddle), after
+  // saddle_wait * 2^k. The corotational human's fourth step (0 inverted points): 92 Newton iterations
+  // with the ten-fold drop only, 41 with 4; with the longer steps of saddle() 40 with 4, 42 with 2.
+  static constexpr int saddle_wait = 4;
 
   // The largest fraction of inverted points that still allows the exact Hessian (PerPoint, Exact).
   static constexpr double few = 0.01;
@@ -71,6 +85,7 @@ class HessianPolicy {
     const bool tangled =
         undefined || (inverted_ == Inverted::WholeMesh ? inverted_fraction > 0.0 : inverted_fraction > few);
     last_residual_ = residual;
+    last_inverted_ = inverted_fraction;
     if (mode_ == Mode::FellBack && (residual < retry_below_ || (wait_ > 0 && projected_since_ >= wait_)))
       mode_ = Mode::Projected;  // far enough, or long enough: may try again
     if (mode_ == Mode::FellBack) ++projected_since_;
@@ -82,7 +97,15 @@ class HessianPolicy {
   }
 
   // The line search's findings about a direction computed from the last Jacobian.
-  void direction_not_descent() { fall_back(false); }
+  void direction_not_descent() {
+    if (!last_exact_) return;
+    const bool saddle = !(last_inverted_ > 0.0);
+    fall_back(false);
+    if (saddle) {
+      saddle_ = true;
+      wait_ = saddle_wait << std::min(saddle_falls_++, 20);
+    }
+  }
   void step_taken(double step) {
     if (step < 0.5) fall_back(true);
   }
@@ -105,10 +128,10 @@ class HessianPolicy {
   Inverted inverted_ = Inverted::PerPoint;
   double f0_ = 0.0;
   Mode mode_ = Mode::Projected;
-  bool exact_used_ = false, last_exact_ = false, fell_back_ = false;
-  // After a short step: FellBack for wait_ projected Jacobians at most (0: until retry_below_).
-  int short_falls_ = 0, wait_ = 0, projected_since_ = 0;
-  double last_residual_ = 0.0, retry_below_ = 0.0;  // FellBack until the residual is below retry_below_
+  bool exact_used_ = false, last_exact_ = false, fell_back_ = false, saddle_ = false;
+  // After a short step or a saddle: FellBack for wait_ projected Jacobians at most (0: until retry_below_).
+  int short_falls_ = 0, saddle_falls_ = 0, wait_ = 0, projected_since_ = 0;
+  double last_residual_ = 0.0, last_inverted_ = 0.0, retry_below_ = 0.0;  // FellBack until the residual is below retry_below_
 };
 
 }  // namespace sinew
