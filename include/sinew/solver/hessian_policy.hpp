@@ -97,30 +97,32 @@ class HessianPolicy {
   }
 
   // The line search's findings about a direction computed from the last Jacobian.
+  // With nothing inverted it is a saddle, retried by count; with inverted points the ten-fold drop only.
   void direction_not_descent() {
-    if (!last_exact_) return;
-    const bool saddle = !(last_inverted_ > 0.0);
-    fall_back(false);
-    if (saddle) {
+    if (last_exact_ && !(last_inverted_ > 0.0)) {
       saddle_ = true;
-      wait_ = saddle_wait << std::min(saddle_falls_++, 20);
+      fall_back(saddle_wait, &saddle_falls_);
+    } else {
+      fall_back(0, nullptr);
     }
   }
   void step_taken(double step) {
-    if (step < 0.5) fall_back(true);
+    if (step < 0.5) fall_back(first_wait, &short_falls_);
   }
-  void line_search_failed() { fall_back(true); }
+  void line_search_failed() { fall_back(first_wait, &short_falls_); }
 
   // Redo a failed solve with projection throughout?
   bool retry_projected() const { return exact_used_; }
 
  private:
-  void fall_back(bool counted) {
+  // From an exact Jacobian: FellBack until the ten-fold drop, or after first * 2^k projected Jacobians
+  // where `falls` counts k (and is counted up); no count (null) waits for the drop only.
+  void fall_back(int first, int* falls) {
     if (!last_exact_) return;
     mode_ = Mode::FellBack;
     fell_back_ = true;
     retry_below_ = 0.1 * last_residual_;
-    wait_ = counted ? first_wait << std::min(short_falls_++, 20) : 0;
+    wait_ = falls ? first << std::min((*falls)++, 20) : 0;
     projected_since_ = 0;
   }
 
