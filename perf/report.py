@@ -104,6 +104,10 @@ def main(out):
     if tw.get("cg_per_newton") and t30.get("cg_per_newton"):
         g = t30["cg_per_newton"] / tw["cg_per_newton"]
         t["CG per Newton growth 15^3 -> 30^3 <= 1.25x"] = {"measured": round(g, 2), "met": g <= 1.25}
+    m15, m30 = scenes.get("twist15_md_1x2") or {}, scenes.get("twist30_md_1x2") or {}
+    if m15.get("cg_per_newton") and m30.get("cg_per_newton"):
+        g = m30["cg_per_newton"] / m15["cg_per_newton"]
+        t["CG per Newton growth 15^3 -> 30^3 <= 1.25x, mean dilatation"] = {"measured": round(g, 2), "met": g <= 1.25}
     big = [s for n, s in scenes.items() if n.startswith("stretch") and s.get("dofs", 0) > 500000]
     if big and big[0].get("seconds_per_step"):
         b = big[0]

@@ -21,6 +21,7 @@ struct Range {
   static Range closed(double a, double b) { return {a, b, false, false}; }
   static Range open(double a, double b) { return {a, b, true, true}; }
   static Range closed_open(double a, double b) { return {a, b, false, true}; }
+  static Range open_closed(double a, double b) { return {a, b, true, false}; }
 
   bool contains(double x) const {
     if (std::isnan(x)) return false;

@@ -199,12 +199,14 @@ KOKKOS_INLINE_FUNCTION void mirror_stiffness(ElementResult<Element>& r) {
 
 // The element with its law's volume term on the mean dilatation (mean_dilatation.hpp): a first pass
 // over the points for Jbar, a second for the energy, force and stiffness with the volume factor at Jbar,
-// and the element's rank-one volume stiffness (lambda / V) b b^T, b_(ai) = sum_q w_q cof(F_q)_iJ dN_a,J.
+// and the element's rank-one volume stiffness (s lambda / V) b b^T, b_(ai) = sum_q w_q cof(F_q)_iJ dN_a,J,
+// s = `share` of the volume term on the mean (the rest stays at the points).
 template <class Element, class Law, class MemorySpace>
 KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Projection projection,
                                                             const ElementGeometry<MemorySpace>& g, int e,
                                                             const double ue[3 * Element::nodes], bool want_force,
-                                                            bool want_matrix, ElementResult<Element>& r) {
+                                                            bool want_matrix, ElementResult<Element>& r,
+                                                            double share = 1.0) {
   constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
   clear_result(want_matrix, r);
   PointState<Element> s[Element::points];
@@ -217,6 +219,7 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
   MeanDilatationPoint<Law> point;
   point.law = law;
   point.Jbar = JV / V;
+  point.share = share;
   double b[NDOF];
   for (int k = 0; k < NDOF; ++k) b[k] = 0.0;
   for (int q = 0; q < Element::points; ++q) {
@@ -232,7 +235,7 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
   }
   r.totals.energy += point.element_energy(V);
   if (want_matrix) {
-    const double k = law.volume_term().lambda / V;
+    const double k = share * law.volume_term().lambda / V;
     for (int a = 0; a < NDOF; ++a)
       for (int c = a; c < NDOF; ++c) r.K[a][c] += k * b[a] * b[c];
     mirror_stiffness(r);
@@ -241,15 +244,16 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
   r.J_avg = point.Jbar;
 }
 
-// `mean_dilatation`: the law's volume term on the element's mean dilatation (laws with a volume term
-// only; the parameters refuse it for the others, and here it is ignored for them).
+// `mean_dilatation`: the share of the law's volume term on the element's mean dilatation, 0 for none
+// (laws with a volume term only; the parameters refuse it for the others, and here it is ignored for them).
 template <class Element, class Model, class MemorySpace>
 KOKKOS_INLINE_FUNCTION void compute_element(const Model& model, Projection projection,
                                             const ElementGeometry<MemorySpace>& g, int e,
                                             const double ue[3 * Element::nodes], bool want_force,
-                                            bool want_matrix, ElementResult<Element>& r, bool mean_dilatation = false) {
+                                            bool want_matrix, ElementResult<Element>& r, double mean_dilatation = 0.0) {
   if constexpr (has_volume_term<Model>::value) {
-    if (mean_dilatation) return compute_element_mean_dilatation<Element>(model, projection, g, e, ue, want_force, want_matrix, r);
+    if (mean_dilatation > 0.0)
+      return compute_element_mean_dilatation<Element>(model, projection, g, e, ue, want_force, want_matrix, r, mean_dilatation);
   }
   constexpr int NPE = Element::nodes;
   clear_result(want_matrix, r);
@@ -399,7 +403,7 @@ struct ElementLoop : TotalsReduction {
   Kokkos::View<const double*, memory_space> u;      // overlap DOFs: 3 * local node + component
   Target target;
   bool want_force = false, want_matrix = false;
-  bool mean_dilatation = false;  // the law's volume term on the element's mean dilatation
+  double mean_dilatation = 0.0;  // the share of the law's volume term on the element's mean dilatation
   ElementFields<memory_space> fields;
   // Coloured chunks (discretization/colouring.hpp), or empty: one element per work item, atomic adds.
   // Work item i is chunk chunk_first + i, the elements elements(chunks(c)) .. elements(chunks(c + 1) - 1),

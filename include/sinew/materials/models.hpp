@@ -48,8 +48,9 @@ struct MaterialSpec {
   double mu_L = 0.0, lambda_L = 0.0;  // Lame constants the model reproduces at small strain
   MaterialOptions options = default_material_options();
   Projection projection = Projection::Clamp;
-  // The law's volume term on each hex8's mean dilatation (mean_dilatation.hpp) instead of per point.
-  bool mean_dilatation = false;
+  // The share of the law's volume term on each hex8's mean dilatation (mean_dilatation.hpp), the rest
+  // per point; 0: all per point (the paper's element).
+  double mean_dilatation = 0.0;
   // Mass density per reference volume: not part of the law, but of the material (gravity, inertia).
   double density = 1000.0;
 };
