@@ -206,7 +206,7 @@ KOKKOS_INLINE_FUNCTION void compute_element_mean_dilatation(const Law& law, Proj
                                                             const ElementGeometry<MemorySpace>& g, int e,
                                                             const double ue[3 * Element::nodes], bool want_force,
                                                             bool want_matrix, ElementResult<Element>& r,
-                                                            double share = 1.0) {
+                                                            double share) {
   constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
   clear_result(want_matrix, r);
   PointState<Element> s[Element::points];
