@@ -14,6 +14,7 @@
 #include <Teuchos_ParameterList.hpp>
 #include <gtest/gtest.h>
 
+#include <map>
 #include <tuple>
 
 using namespace sinew;
@@ -246,6 +247,60 @@ TEST(Parameters, NumbersAsPeopleWriteThem) {
     EXPECT_FALSE(strict_number(bad, false)) << bad;
   EXPECT_TRUE(strict_number("-12", true));
   for (const char* bad : {"1.5", "99999999999", "1e3", "nan"}) EXPECT_FALSE(strict_number(bad, true)) << bad;
+}
+
+TEST(Parameters, FingerprintRecordsEveryEntryWithWhetherItIsItsDefault) {
+  Teuchos::ParameterList p;
+  p.set("Ratio", 0.1);
+  p.set("Mode", std::string("slow"));  // the default, spelled out
+  p.sublist("Items").sublist("a=b\nc").set("Gain", 3.0);
+  const SectionFingerprint f = section_fingerprint(parse_section<Section>(p, "Test"));
+  std::map<std::string, SectionEntry> by;
+  for (const auto& e : f.entries) by[e.path] = e;
+  EXPECT_EQ(by.at("Count").value, "3");
+  EXPECT_TRUE(by.at("Count").at_default);
+  EXPECT_EQ(by.at("Ratio").value, "0.1");  // the shortest text that reads back exactly
+  EXPECT_FALSE(by.at("Ratio").at_default);
+  EXPECT_EQ(by.at("Name").value, "\"x\"");
+  EXPECT_EQ(by.at("Axis").value, "{0, 0, 1}");
+  EXPECT_TRUE(by.at("Axis").at_default);
+  EXPECT_EQ(by.at("Limit").value, "(none)");
+  EXPECT_EQ(by.at("Mode").value, "slow");
+  EXPECT_TRUE(by.at("Mode").at_default);
+  EXPECT_EQ(by.at("Leaf/Gain").value, "2");
+  EXPECT_EQ(by.at("Items/a=b\nc/Gain").value, "3");
+  // The digest is that of the canonical text alone: the records do not change it.
+  EXPECT_EQ(f.digest, section_digest(parse_section<Section>(p, "Test")));
+  EXPECT_NE(f.digest, section_digest(default_section<Section>()));
+  // Names and values with '=', '\' and newlines survive the checkpoint's text.
+  const std::vector<SectionEntry> back = decode_entries(encode_entries(f.entries));
+  ASSERT_EQ(back.size(), f.entries.size());
+  for (std::size_t k = 0; k < back.size(); ++k) {
+    EXPECT_EQ(back[k].path, f.entries[k].path);
+    EXPECT_EQ(back[k].value, f.entries[k].value);
+  }
+  const std::vector<SectionEntry> odd{{"a\\b", "x=y\\\n", false}};
+  EXPECT_EQ(decode_entries(encode_entries(odd))[0].value, "x=y\\\n");
+  EXPECT_EQ(decode_entries(encode_entries(odd))[0].path, "a\\b");
+  for (const char* bad : {"a=1", "noequals\n", "a=\\q\n", "a=1\\"}) EXPECT_THROW(decode_entries(bad), std::invalid_argument) << bad;
+  for (double x : {0.1, 1.0 / 3.0, 2.5e-7, 1e22, -1234.5, 20000.0}) EXPECT_EQ(std::strtod(round_trip_number(x).c_str(), nullptr), x);
+  EXPECT_EQ(round_trip_number(2.5e-7), "2.5e-7");
+}
+
+TEST(Parameters, AnEarlierRunsEntriesDifferOnlyWhereTheValuesDoOrANewEntryIsNotAtItsDefault) {
+  const std::vector<SectionEntry> stored{{"E", "10000", false}, {"nu", "0.45", false}, {"Old", "1", false}};
+  EntryDifference d = compare_entries(stored, {{"nu", "0.45", false}, {"E", "10000", false}, {"Old", "1", true}});
+  EXPECT_TRUE(d.differ.empty());  // order does not matter
+  EXPECT_TRUE(d.new_at_default.empty());
+  d = compare_entries(stored, {{"E", "20000", false}, {"nu", "0.45", false}, {"Old", "1", true}, {"New", "0.8", true}});
+  ASSERT_EQ(d.differ.size(), 1u);
+  EXPECT_EQ(d.differ[0], "'E' 10000 there, 20000 here");
+  ASSERT_EQ(d.new_at_default.size(), 1u);
+  EXPECT_EQ(d.new_at_default[0], "'New' (0.8)");
+  d = compare_entries(stored, {{"E", "10000", false}, {"nu", "0.45", false}, {"New", "0.5", false}});
+  ASSERT_EQ(d.differ.size(), 2u);
+  EXPECT_EQ(d.differ[0], "'New' 0.5 here, which that run did not have");
+  EXPECT_EQ(d.differ[1], "'Old' 1 there, which this run does not have");
 }
 
 TEST(Parameters, StrictXmlReading) {

@@ -3,21 +3,18 @@
 #include <sinew/core/parameters.hpp>
 
 #include <algorithm>
+#include <cstdlib>
+#include <map>
+#include <stdexcept>
 #include <cstdio>
 #include <iomanip>
 
 namespace sinew {
 
-std::string format_number(double x) {
-  if (!std::isfinite(x)) return std::isnan(x) ? "nan" : (x > 0 ? "inf" : "-inf");
-  char buf[64];
-  if (x == std::floor(x) && std::fabs(x) < 1e5) {
-    std::snprintf(buf, sizeof buf, "%.0f", x);
-    return buf;
-  }
-  std::snprintf(buf, sizeof buf, "%g", x);
-  // 1e+06 -> 1e6, 2.5e-07 -> 2.5e-7: the way people write exponents.
-  std::string s = buf;
+namespace {
+
+// 1e+06 -> 1e6, 2.5e-07 -> 2.5e-7: the way people write exponents.
+std::string plain_exponent(std::string s) {
   const auto e = s.find('e');
   if (e != std::string::npos) {
     std::string mant = s.substr(0, e), exp = s.substr(e + 1);
@@ -27,6 +24,115 @@ std::string format_number(double x) {
     s = mant + "e" + (neg ? "-" : "") + exp;
   }
   return s;
+}
+
+}  // namespace
+
+std::string format_number(double x) {
+  if (!std::isfinite(x)) return std::isnan(x) ? "nan" : (x > 0 ? "inf" : "-inf");
+  char buf[64];
+  if (x == std::floor(x) && std::fabs(x) < 1e5) {
+    std::snprintf(buf, sizeof buf, "%.0f", x);
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return plain_exponent(buf);
+}
+
+std::string round_trip_number(double x) {
+  if (!std::isfinite(x)) return format_number(x);
+  char buf[64];
+  if (x == std::floor(x) && std::fabs(x) < 1e15) {
+    std::snprintf(buf, sizeof buf, "%.0f", x);
+    return buf;
+  }
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
+  return plain_exponent(buf);
+}
+
+namespace {
+
+void escape_into(std::string& out, const std::string& s) {
+  for (const char c : s) {
+    if (c == '\\' || c == '=')
+      (out += '\\') += c;
+    else if (c == '\n')
+      out += "\\n";
+    else
+      out += c;
+  }
+}
+
+}  // namespace
+
+std::string encode_entries(const std::vector<SectionEntry>& entries) {
+  std::string out;
+  for (const auto& e : entries) {
+    escape_into(out, e.path);
+    out += '=';
+    escape_into(out, e.value);
+    out += '\n';
+  }
+  return out;
+}
+
+std::vector<SectionEntry> decode_entries(const std::string& text) {
+  std::vector<SectionEntry> out;
+  SectionEntry e;
+  std::string* field = &e.path;
+  bool have_value = false;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k];
+    if (c == '\\') {
+      if (++k == text.size()) throw std::invalid_argument("an entry list ends inside an escape");
+      const char n = text[k];
+      if (n == 'n')
+        *field += '\n';
+      else if (n == '\\' || n == '=')
+        *field += n;
+      else
+        throw std::invalid_argument(std::string("an entry list has the unknown escape \\") + n);
+    } else if (c == '=' && !have_value) {
+      have_value = true;
+      field = &e.value;
+    } else if (c == '\n') {
+      if (!have_value || e.path.empty()) throw std::invalid_argument("an entry list has a line without 'path=value'");
+      out.push_back(e);
+      e = SectionEntry();
+      field = &e.path;
+      have_value = false;
+    } else {
+      *field += c;
+    }
+  }
+  if (!e.path.empty() || have_value) throw std::invalid_argument("an entry list does not end with a newline");
+  return out;
+}
+
+EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now) {
+  EntryDifference d;
+  std::map<std::string, const SectionEntry*> before;
+  for (const auto& e : stored) before[e.path] = &e;
+  for (const auto& e : now) {
+    const auto it = before.find(e.path);
+    if (it == before.end()) {
+      if (e.at_default)
+        d.new_at_default.push_back("'" + e.path + "' (" + e.value + ")");
+      else
+        d.differ.push_back("'" + e.path + "' " + e.value + " here, which that run did not have");
+      continue;
+    }
+    if (it->second->value != e.value)
+      d.differ.push_back("'" + e.path + "' " + it->second->value + " there, " + e.value + " here");
+    before.erase(it);
+  }
+  // What is left the earlier run had and this one does not, in the order it recorded them.
+  for (const auto& e : stored)
+    if (before.count(e.path)) d.differ.push_back("'" + e.path + "' " + e.value + " there, which this run does not have");
+  return d;
 }
 
 std::string or_list(const std::vector<std::string>& names) {

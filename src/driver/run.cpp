@@ -64,9 +64,9 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   u_previous_ = scene_->system().create_vector();
   // The sections that define the problem solved (not Solver or Output, which a restart may change).
   const auto& p = config_.params;
-  const Output::Physics physics{{"Mesh", section_digest(p.mesh)},         {"Material", section_digest(p.material)},
-                                {"Loading", section_digest(p.loading)},   {"Skeleton", section_digest(p.skeleton)},
-                                {"Contact", section_digest(p.contact)},   {"Time", section_digest(p.time)}};
+  const Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},       {"Material", section_fingerprint(p.material)},
+                                {"Loading", section_fingerprint(p.loading)}, {"Skeleton", section_fingerprint(p.skeleton)},
+                                {"Contact", section_fingerprint(p.contact)}, {"Time", section_fingerprint(p.time)}};
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {
     at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get(),
@@ -139,6 +139,7 @@ void Simulation::print_header() const {
               solver_->absolute_tolerance(), out_->directory().c_str());
   if (at_.step > 0 || at_.load > 0.0)
     std::printf("  restarting after step %d at load %.6g from %s\n", at_.step, at_.load, opt_.restart_file.c_str());
+  for (const auto& note : at_.notes) std::printf("  restart note: %s\n", note.c_str());
   std::fflush(stdout);
 }
 
@@ -382,7 +383,7 @@ int Simulation::run() {
                      at_.load, out.checkpoint_file().c_str());
       return signal_exit_code(stop_signal_);
     }
-    at_ = LoadState{k, rec.load, 0.0, 0, at_.previous_load};
+    at_ = LoadState{k, rec.load, 0.0, 0, at_.previous_load, {}};
     rec.totals = sys.evaluate(u, nullptr, nullptr);
     rec.volume_ratio = rec.totals.volume / V0;
     if (dynamics_) {

@@ -125,6 +125,19 @@ void write_attribute(hid_t file, const char* name, const std::string& value) {
   attr.close();
 }
 
+// A 1-D char dataset (written by write_rows) as a string, read whole by this rank.
+std::string read_text(hid_t file, const std::string& name) {
+  H5 dset(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose, "open " + name);
+  H5 space(H5Dget_space(dset.id()), H5Sclose, "dataspace of " + name);
+  if (H5Sget_simple_extent_ndims(space.id()) != 1) throw std::runtime_error("not a one-dimensional dataset");
+  hsize_t n = 0;
+  H5Sget_simple_extent_dims(space.id(), &n, nullptr);
+  if (n > (hsize_t(1) << 26)) throw std::runtime_error("larger than 64 MB");
+  std::string text(static_cast<std::size_t>(n), '\0');
+  if (n > 0) check(H5Dread(dset.id(), H5T_NATIVE_CHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, text.data()), "reading " + name);
+  return text;
+}
+
 // The "layout" attribute of a results file (read by one rank): which row order its rows follow, or
 // nothing for a file that has none (written before layouts were recorded) or cannot be read.
 std::optional<std::uint64_t> read_layout(const std::string& path) {
@@ -517,7 +530,14 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
       write_rows(file, "/velocity", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, vel.data(), tmp);
     write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
     write_attribute(file, "steps", steps_);
-    for (const auto& [section, digest] : physics_) write_attribute(file, ("physics " + section).c_str(), digest);
+    // Each physics section's digest, and its entries, so that a restart can name what differs and accept
+    // parameters added since at their defaults (a char dataset: an attribute holds at most 64 kB).
+    for (const auto& section : physics_) {
+      write_attribute(file, ("physics " + section.name).c_str(), section.fingerprint.digest);
+      const std::string text = encode_entries(section.fingerprint.entries);
+      const long long n = static_cast<long long>(text.size());
+      write_rows(file, "/physics " + section.name, H5T_NATIVE_CHAR, n, 1, 0, root_ ? n : 0, text.data(), tmp);
+    }
   });
 }
 
@@ -574,9 +594,9 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     // The same physics: a checkpoint of another material, load or mesh would continue a different
     // problem from a state that is not its own (checkpoints written before digests were kept pass).
     if (physics) {
-      std::vector<std::string> changed;
-      for (const auto& [section, digest] : *physics) {
-        const std::string name = "physics " + section;
+      std::vector<std::string> changed, details;
+      for (const auto& section : *physics) {
+        const std::string name = "physics " + section.name;
         if (H5Aexists(file.id(), name.c_str()) <= 0) continue;
         H5 a(H5Aopen(file.id(), name.c_str(), H5P_DEFAULT), H5Aclose, "attribute " + name);
         H5 type(H5Aget_type(a.id()), H5Tclose, "attribute type");
@@ -584,12 +604,36 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
         if (H5Tget_class(type.id()) != H5T_STRING || H5Aread(a.id(), type.id(), stored.data()) < 0)
           fail("cannot read attribute '" + name + "' (corrupt file?)");
         stored.erase(std::find(stored.begin(), stored.end(), '\0'), stored.end());
-        if (stored != digest) changed.push_back("'" + section + "'");
+        if (stored == section.fingerprint.digest) continue;
+        // Checkpoints written before the entries were kept have the digest only.
+        const std::string dataset = "/" + name;
+        if (H5Lexists(file.id(), dataset.c_str(), H5P_DEFAULT) <= 0) {
+          changed.push_back("'" + section.name + "'");
+          continue;
+        }
+        std::vector<SectionEntry> entries;
+        try {
+          entries = decode_entries(read_text(file.id(), dataset));
+        } catch (const std::exception& e) {
+          fail("cannot read '" + dataset + "' (corrupt file?): " + e.what());
+        }
+        const EntryDifference d = compare_entries(entries, section.fingerprint.entries);
+        for (const auto& e : d.new_at_default)
+          c.notes.push_back("'" + section.name + "/" + e.substr(1) + " is new since the checkpoint was written; taken at its default");
+        if (d.differ.empty()) continue;
+        changed.push_back("'" + section.name + "'");
+        for (const auto& e : d.differ) details.push_back("'" + section.name + "/" + e.substr(1));
       }
-      if (!changed.empty())
+      if (!changed.empty()) {
+        std::string listed;
+        const std::size_t shown = std::min<std::size_t>(details.size(), 8);
+        for (std::size_t k = 0; k < shown; ++k) listed += (k ? "; " : " (") + details[k];
+        if (details.size() > shown) listed += "; and " + std::to_string(details.size() - shown) + " more";
+        if (shown) listed += ")";
         fail("was written by a run whose " + or_list(changed) + " section" + (changed.size() > 1 ? "s differ" : " differs") +
-             " from this scene's; a restart continues the same physics (sinew --restart-anyway FILE continues it with "
-             "this scene's)");
+             " from this scene's" + listed + "; a restart continues the same physics (sinew --restart-anyway FILE "
+             "continues it with this scene's)");
+      }
     }
     const double step = attribute("step", 0, steps);
     c.step = static_cast<int>(step);

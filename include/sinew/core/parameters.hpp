@@ -390,38 +390,69 @@ void print_section(std::ostream& os, const std::string& title) {
   os << "\n";
 }
 
+// One entry of a section as a checkpoint records it: its path within the section ("Leaf/Gain"), its
+// value as people read it (numbers to the digits that round-trip), and whether that is its default.
+struct SectionEntry {
+  std::string path, value;
+  bool at_default = false;
+};
+
+// The shortest decimal text that reads back as x exactly.
+std::string round_trip_number(double x);
+
+// Entries as one text, "path=value" per line ('\\', '=' and newlines escaped), and back. Throws
+// std::invalid_argument on a text that is not such a list.
+std::string encode_entries(const std::vector<SectionEntry>& entries);
+std::vector<SectionEntry> decode_entries(const std::string& text);
+
+// How a section's entries recorded by an earlier run (`stored`) differ from this run's (`now`):
+// `differ` names every entry whose value changed, that only one side has, or that is new here at a value
+// other than its default; `new_at_default` the entries the earlier run did not have (a parameter added
+// since) that this run leaves at their defaults, which a new parameter's default keeps the old
+// behaviour for, so they do not count as a difference.
+struct EntryDifference {
+  std::vector<std::string> differ, new_at_default;
+};
+EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now);
+
 // Writes a parsed section's values as canonical text, one "path=value;" per entry, defaults included
 // (so neither the order of a file's entries nor whether a default is spelled out changes it; numbers
 // exactly, in hexadecimal floating point). A checkpoint keeps a digest of it per physics section, so
-// that a restart can tell whether it continues the same physics.
+// that a restart can tell whether it continues the same physics, and the entries themselves (`entries`),
+// so that it can say which differ.
 class Fingerprinter {
  public:
-  explicit Fingerprinter(std::ostream& os, std::string prefix = "") : os_(os), prefix_(std::move(prefix)) {}
+  explicit Fingerprinter(std::ostream& os, std::string prefix = "", std::vector<SectionEntry>* entries = nullptr)
+      : os_(os), prefix_(std::move(prefix)), entries_(entries) {}
 
   template <class T>
-  void entry(const char* name, T& field, const section_detail::identity_t<T>&, const std::string&, Range = Range::any()) {
-    put(name, field);
+  void entry(const char* name, T& field, const section_detail::identity_t<T>& def, const std::string&, Range = Range::any()) {
+    put(name, field, field == def);
   }
   template <class T>
   void optional(const char* name, std::optional<T>& field, const std::string&, Range = Range::any()) {
-    if (field)
-      put(name, *field);
-    else
+    if (field) {
+      put(name, *field, false);
+    } else {
       os_ << prefix_ << name << "=(none);";
+      record(name, "(none)", true);
+    }
   }
   template <class E>
-  void choice(const char* name, E& field, const section_detail::identity_t<E>&, const Choices<E>& options, const std::string&) {
-    os_ << prefix_ << name << "=" << param_detail::name_of(options, field) << ";";
+  void choice(const char* name, E& field, const section_detail::identity_t<E>& def, const Choices<E>& options, const std::string&) {
+    const std::string v = param_detail::name_of(options, field);
+    os_ << prefix_ << name << "=" << v << ";";
+    record(name, v, field == def);
   }
   template <class S>
   void section(const char* name, S& sub, const std::string&) {
-    Fingerprinter f(os_, prefix_ + name + "/");
+    Fingerprinter f(os_, prefix_ + name + "/", entries_);
     sub.visit(f);
   }
   template <class S>
   void sections(const char* name, NamedSections<S>& subs, const std::string&) {
     for (auto& [key, sub] : subs) {
-      Fingerprinter f(os_, prefix_ + name + "/" + key + "/");
+      Fingerprinter f(os_, prefix_ + name + "/" + key + "/", entries_);
       sub.visit(f);
     }
   }
@@ -432,18 +463,31 @@ class Fingerprinter {
   template <class S>
   void other_sublists(NamedSections<S>& subs, const std::string&) {
     for (auto& [key, sub] : subs) {
-      Fingerprinter f(os_, prefix_ + key + "/");
+      Fingerprinter f(os_, prefix_ + key + "/", entries_);
       sub.visit(f);
     }
   }
-  void raw(const char* name, Teuchos::ParameterList& list, const std::string&) { os_ << prefix_ << name << "=" << list << ";"; }
+  void raw(const char* name, Teuchos::ParameterList& list, const std::string&) {
+    std::ostringstream text;
+    text << list;
+    os_ << prefix_ << name << "=" << text.str() << ";";
+    record(name, text.str(), list.numParams() == 0);
+  }
 
  private:
   template <class T>
-  void put(const char* name, const T& v) {
+  void put(const char* name, const T& v, bool at_default) {
     os_ << prefix_ << name << "=";
     value(v);
     os_ << ";";
+    if (entries_) {
+      std::ostringstream text;
+      readable(text, v);
+      record(name, text.str(), at_default);
+    }
+  }
+  void record(const char* name, const std::string& v, bool at_default) {
+    if (entries_) entries_->push_back({prefix_ + name, v, at_default});
   }
   template <class T>
   void value(const T& v) {
@@ -462,23 +506,55 @@ class Fingerprinter {
       os_ << "}";
     }
   }
+  template <class T>
+  static void readable(std::ostream& os, const T& v) {
+    if constexpr (std::is_same_v<T, std::string>) {
+      os << '"' << v << '"';
+    } else if constexpr (std::is_same_v<T, bool>) {
+      os << (v ? "true" : "false");
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      os << round_trip_number(static_cast<double>(v));
+    } else {
+      os << "{";
+      bool first = true;
+      for (const auto& x : v) {
+        if (!first) os << ", ";
+        first = false;
+        readable(os, x);
+      }
+      os << "}";
+    }
+  }
 
   std::ostream& os_;
   std::string prefix_;
+  std::vector<SectionEntry>* entries_;
 };
 
-// A 16-hex-digit digest (FNV-1a, 64 bits) of a section's canonical text.
+// A section's digest (16 hex digits, FNV-1a 64 of its canonical text) and its entries.
+struct SectionFingerprint {
+  std::string digest;
+  std::vector<SectionEntry> entries;
+};
+
 template <class S>
-std::string section_digest(const S& section) {
+SectionFingerprint section_fingerprint(const S& section) {
   S copy = section;  // visit() is not const
   std::ostringstream os;
-  Fingerprinter f(os);
+  SectionFingerprint out;
+  Fingerprinter f(os, "", &out.entries);
   copy.visit(f);
   std::uint64_t h = 1469598103934665603ull;
   for (const unsigned char c : os.str()) h = (h ^ c) * 1099511628211ull;
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
+  out.digest = hex;
+  return out;
+}
+
+template <class S>
+std::string section_digest(const S& section) {
+  return section_fingerprint(section).digest;
 }
 
 }  // namespace sinew

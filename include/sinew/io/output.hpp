@@ -20,6 +20,7 @@
 #pragma once
 
 #include <sinew/algebra/system.hpp>
+#include <sinew/core/parameters.hpp>
 #include <sinew/core/range.hpp>
 #include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
@@ -82,6 +83,9 @@ struct LoadState {
   double increment = 0.0;  // the next increment to try (0: the rest of the next step)
   int cuts = 0;            // cuts made so far in the step under way
   double previous_load = -1.0;  // load of the converged state before this one (< 0: none kept)
+  // What a restart should tell the user: entries of its physics that the checkpoint's run did not have,
+  // taken at their defaults.
+  std::vector<std::string> notes;
 };
 
 class Output {
@@ -131,12 +135,18 @@ class Output {
   // number of steps, or (with physics given) from a scene with other physics.
   // With velocity given, the checkpoint must hold one (a dynamic run's).
   // With physics given, a checkpoint whose stored digest of a section differs is refused, naming the
-  // sections.
-  using Physics = std::vector<std::pair<std::string, std::string>>;  // section name, digest
+  // section and, where the checkpoint recorded its entries, the entries that differ; entries the
+  // checkpoint's run did not have and this scene leaves at their defaults (parameters added since) are
+  // accepted and named in the returned notes.
+  struct PhysicsSection {
+    std::string name;
+    SectionFingerprint fingerprint;
+  };
+  using Physics = std::vector<PhysicsSection>;
   static LoadState read_checkpoint(const std::string& path, const System& system, int steps, Vector& u,
                                    Vector* previous = nullptr, Vector* velocity = nullptr,
                                    const Physics* physics = nullptr);
-  // The digests of the scene's physics sections, stored in every checkpoint written after this.
+  // The scene's physics sections, whose digests and entries every checkpoint written after this stores.
   void set_physics(Physics physics) { physics_ = std::move(physics); }
 
  private:
