@@ -536,7 +536,7 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
       write_attribute(file, ("physics " + section.name).c_str(), section.fingerprint.digest);
       const std::string text = encode_entries(section.fingerprint.entries);
       const long long n = static_cast<long long>(text.size());
-      write_rows(file, "/physics " + section.name, H5T_NATIVE_CHAR, n, 1, 0, root_ ? n : 0, text.data(), tmp);
+      if (n > 0) write_rows(file, "/physics " + section.name, H5T_NATIVE_CHAR, n, 1, 0, root_ ? n : 0, text.data(), tmp);
     }
   });
 }
