@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <sstream>
 #include <tuple>
 
 using namespace sinew;
@@ -269,9 +270,16 @@ TEST(Parameters, FingerprintRecordsEveryEntryWithWhetherItIsItsDefault) {
   EXPECT_TRUE(by.at("Mode").at_default);
   EXPECT_EQ(by.at("Leaf/Gain").value, "2");
   EXPECT_EQ(by.at("Items/a=b\nc/Gain").value, "3");
-  // The digest is that of the canonical text alone: the records do not change it.
-  EXPECT_EQ(f.digest, section_digest(parse_section<Section>(p, "Test")));
-  EXPECT_NE(f.digest, section_digest(default_section<Section>()));
+  // The digest is that of the canonical text alone: recording the entries does not change the text.
+  Section parsed = parse_section<Section>(p, "Test");
+  std::ostringstream plain, recorded;
+  std::vector<SectionEntry> records;
+  Fingerprinter without(plain), with(recorded, "", &records);
+  parsed.visit(without);
+  parsed.visit(with);
+  EXPECT_EQ(plain.str(), recorded.str());
+  EXPECT_EQ(records.size(), f.entries.size());
+  EXPECT_NE(f.digest, section_fingerprint(default_section<Section>()).digest);
   // Names and values with '=', '\' and newlines survive the checkpoint's text.
   const std::vector<SectionEntry> back = decode_entries(encode_entries(f.entries));
   ASSERT_EQ(back.size(), f.entries.size());
@@ -297,6 +305,7 @@ TEST(Parameters, AnEarlierRunsEntriesDifferOnlyWhereTheValuesDoOrANewEntryIsNotA
   EXPECT_EQ(d.differ[0], "'E' 10000 there, 20000 here");
   ASSERT_EQ(d.new_at_default.size(), 1u);
   EXPECT_EQ(d.new_at_default[0], "'New' (0.8)");
+  EXPECT_EQ(compare_entries(stored, {{"E", "20000", false}}, "Material/").differ[0], "'Material/E' 10000 there, 20000 here");
   d = compare_entries(stored, {{"E", "10000", false}, {"nu", "0.45", false}, {"New", "0.5", false}});
   ASSERT_EQ(d.differ.size(), 2u);
   EXPECT_EQ(d.differ[0], "'New' 0.5 here, which that run did not have");

@@ -3,11 +3,11 @@
 #include <sinew/core/parameters.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <iomanip>
 #include <map>
 #include <stdexcept>
-#include <cstdio>
-#include <iomanip>
 
 namespace sinew {
 
@@ -112,26 +112,28 @@ std::vector<SectionEntry> decode_entries(const std::string& text) {
   return out;
 }
 
-EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now) {
+EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now,
+                                const std::string& prefix) {
   EntryDifference d;
+  auto named = [&](const SectionEntry& e) { return "'" + prefix + e.path + "'"; };
   std::map<std::string, const SectionEntry*> before;
   for (const auto& e : stored) before[e.path] = &e;
   for (const auto& e : now) {
     const auto it = before.find(e.path);
     if (it == before.end()) {
       if (e.at_default)
-        d.new_at_default.push_back("'" + e.path + "' (" + e.value + ")");
+        d.new_at_default.push_back(named(e) + " (" + e.value + ")");
       else
-        d.differ.push_back("'" + e.path + "' " + e.value + " here, which that run did not have");
+        d.differ.push_back(named(e) + " " + e.value + " here, which that run did not have");
       continue;
     }
     if (it->second->value != e.value)
-      d.differ.push_back("'" + e.path + "' " + it->second->value + " there, " + e.value + " here");
+      d.differ.push_back(named(e) + " " + it->second->value + " there, " + e.value + " here");
     before.erase(it);
   }
   // What is left the earlier run had and this one does not, in the order it recorded them.
   for (const auto& e : stored)
-    if (before.count(e.path)) d.differ.push_back("'" + e.path + "' " + e.value + " there, which this run does not have");
+    if (before.count(e.path)) d.differ.push_back(named(e) + " " + e.value + " there, which this run does not have");
   return d;
 }
 

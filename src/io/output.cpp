@@ -617,12 +617,11 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
         } catch (const std::exception& e) {
           fail("cannot read '" + dataset + "' (corrupt file?): " + e.what());
         }
-        const EntryDifference d = compare_entries(entries, section.fingerprint.entries);
-        for (const auto& e : d.new_at_default)
-          c.notes.push_back("'" + section.name + "/" + e.substr(1) + " is new since the checkpoint was written; taken at its default");
+        const EntryDifference d = compare_entries(entries, section.fingerprint.entries, section.name + "/");
+        for (const auto& e : d.new_at_default) c.notes.push_back(e + " is new since the checkpoint was written; taken at its default");
         if (d.differ.empty()) continue;
         changed.push_back("'" + section.name + "'");
-        for (const auto& e : d.differ) details.push_back("'" + section.name + "/" + e.substr(1));
+        details.insert(details.end(), d.differ.begin(), d.differ.end());
       }
       if (!changed.empty()) {
         std::string listed;

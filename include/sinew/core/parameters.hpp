@@ -409,11 +409,12 @@ std::vector<SectionEntry> decode_entries(const std::string& text);
 // `differ` names every entry whose value changed, that only one side has, or that is new here at a value
 // other than its default; `new_at_default` the entries the earlier run did not have (a parameter added
 // since) that this run leaves at their defaults, which a new parameter's default keeps the old
-// behaviour for, so they do not count as a difference.
+// behaviour for, so they do not count as a difference. Each is named by `prefix` + its path, quoted.
 struct EntryDifference {
   std::vector<std::string> differ, new_at_default;
 };
-EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now);
+EntryDifference compare_entries(const std::vector<SectionEntry>& stored, const std::vector<SectionEntry>& now,
+                                const std::string& prefix = "");
 
 // Writes a parsed section's values as canonical text, one "path=value;" per entry, defaults included
 // (so neither the order of a file's entries nor whether a default is spelled out changes it; numbers
@@ -550,11 +551,6 @@ SectionFingerprint section_fingerprint(const S& section) {
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   out.digest = hex;
   return out;
-}
-
-template <class S>
-std::string section_digest(const S& section) {
-  return section_fingerprint(section).digest;
 }
 
 }  // namespace sinew
