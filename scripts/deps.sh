@@ -3,7 +3,10 @@
 #   1. Debian packages (Open MPI, parallel HDF5, BLAS/LAPACK, GoogleTest, Google Benchmark, tools; gmsh to
 #      make meshes, meshio and ParaView's Python with Xvfb to read and render results);
 #   2. Trilinos 13.2 with Kokkos Serial + OpenMP, restored from a prebuilt archive found in a cache
-#      directory, or built from Debian's own source package when no archive is there.
+#      directory, or built from Debian's own source package when no archive is there;
+#   3. for the skin's caches (issue 43): Blender and Chromium (Debian's), and from npm into
+#      <repo>/.deps/viewer the versions pinned in scripts/viewer/package-lock.json of three.js (which
+#      scripts/sinew-view copies into its pages, so they work offline) and the Khronos glTF-Validator.
 #
 # Usage: scripts/deps.sh [--deps-cache DIR] [--prefix DIR] [--jobs N] [--no-apt]
 #   --deps-cache DIR  folder holding trilinos-13.2.0-openmp-debian12-x86_64.tar.xz (CI passes ../shared/deps)
@@ -49,7 +52,8 @@ packages=(build-essential cmake ninja-build ccache pkg-config xz-utils
   libopenmpi-dev openmpi-bin libhdf5-openmpi-dev hdf5-tools
   libblas-dev liblapack-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-h5py python3-matplotlib python3-pil
-  gmsh python3-meshio python3-paraview xvfb xauth libassimp-dev assimp-testmodels)
+  gmsh python3-meshio python3-paraview xvfb xauth libassimp-dev assimp-testmodels
+  blender chromium)
 
 apt_install() {
   local missing=()
@@ -122,6 +126,24 @@ restore_trilinos() {
 }
 
 [ "$do_apt" -eq 1 ] && apt_install "${packages[@]}"
+
+# The viewer's and the tests' npm packages, at the lock file's versions (npm ci: nothing else, no
+# resolution). A machine without npm gets Debian's; without a registry the viewer tests say they skip.
+setup_viewer() {
+  local dir=$prefix/viewer
+  if [ -f "$dir/package-lock.json" ] && cmp -s "$dir/package-lock.json" "$here/viewer/package-lock.json" &&
+     [ -d "$dir/node_modules/three" ] && [ -d "$dir/node_modules/gltf-validator" ]; then
+    return
+  fi
+  if ! command -v npm >/dev/null 2>&1; then
+    [ "$do_apt" -eq 1 ] && apt_install npm || { log "no npm: the viewer's packages are not installed"; return; }
+  fi
+  mkdir -p "$dir"
+  cp "$here/viewer/package.json" "$here/viewer/package-lock.json" "$dir/"
+  log "installing the viewer's npm packages (three, gltf-validator) into $dir"
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >&2) || log "npm ci failed: sinew-view and its tests will say so"
+}
+setup_viewer
 
 if [ -f "$trilinos_cmake/TrilinosConfig.cmake" ]; then
   log "Trilinos already in $trilinos_dir"

@@ -590,3 +590,165 @@ TEST(RigScene, AMotionCaptureDrivesTheRigThroughTheJointMap) {
   std::printf("[ info ] retargeted capture: scale %.4f; bone nodes vs the retargeted joints' motion %.1e (moved up to %.3f)\n",
               retarget.scale(), err, moved);
 }
+
+// ---------------------------------------------------------------------------------------------
+// The skin's caches (issue 43): glTF node transforms, Sinew's frame record, PC2 and glTF files.
+// ---------------------------------------------------------------------------------------------
+#include <sinew/io/skin_cache.hpp>
+
+namespace {
+
+sinew::Affine rotation_scale(double angle, std::array<double, 3> axis, std::array<double, 3> scale, std::array<double, 3> t) {
+  const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  for (double& a : axis) a /= n;
+  const double c = std::cos(angle), s = std::sin(angle);
+  sinew::Affine m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double skew = (i == j) ? 0.0 : ((j == (i + 1) % 3) ? -axis[3 - i - j] : axis[3 - i - j]);
+      m.A(i, j) = ((i == j ? c : 0.0) + (1 - c) * axis[i] * axis[j] + s * skew) * scale[j];
+    }
+  m.t = t;
+  return m;
+}
+
+std::vector<char> file_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(f), {});
+}
+
+sinew::SkinFrame frame(int step, double time, std::size_t vertices, float shift) {
+  sinew::SkinFrame f;
+  f.step = step;
+  f.load = 0.1 * step;
+  f.time = time;
+  for (std::size_t v = 0; v < 3 * vertices; ++v) f.x.push_back(static_cast<float>(v) + shift);
+  f.fields.push_back(std::vector<float>(vertices, 1.0f + shift));
+  return f;
+}
+
+}  // namespace
+
+TEST(SkinCaches, NodeTransformsSplitIntoTranslationRotationAndScaleThatComposeBack) {
+  // Rotations about several axes with uniform, axis and negative (mirror) scales.
+  const std::vector<sinew::Affine> cases = {rotation_scale(0.3, {1, 2, 3}, {1, 1, 1}, {1, -2, 3}),
+                                            rotation_scale(3.1, {0, 0, 1}, {2, 2, 2}, {0, 0, 0}),
+                                            rotation_scale(-2.0, {1, -1, 0.5}, {0.5, 1.5, 3.0}, {0.1, 0.2, 0.3}),
+                                            rotation_scale(1.0, {0.2, 1, 0}, {-1, 1, 1}, {5, 0, 0}),
+                                            rotation_scale(3.14159, {1, 0, 0}, {1, 1, 1}, {0, 1, 0})};
+  for (const auto& m : cases) {
+    float t[3], q[4], s[3];
+    sinew::decompose_trs(m, t, q, s);
+    EXPECT_NEAR(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], 1.0, 1e-6);
+    // R(q) diag(s) must give A back.
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const double R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                            {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                            {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(t[i], m.t[i], 1e-6);
+      for (int j = 0; j < 3; ++j) EXPECT_NEAR(R[i][j] * s[j], m.A(i, j), 2e-6) << i << "," << j;
+    }
+  }
+}
+
+TEST(SkinCaches, FrameFileKeepsTheFramesUpToTheRestartStepAndCutsOffTheRest) {
+  const std::string dir = "test_results/skin_frames";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/skin.frames";
+  const std::vector<std::string> fields{"J"};
+  std::vector<sinew::SkinFrame> kept;
+  std::string note;
+  {
+    sinew::SkinFrameFile file(path, 4, fields, -1, kept, note);
+    for (int k = 0; k < 5; ++k) file.append(frame(2 * k, 0.5 * k, 4, static_cast<float>(k)));
+  }
+  EXPECT_EQ(sinew::read_skin_frames(path).size(), 5u);
+  // A half-written record at the end (a crash while appending) is ignored and cut off.
+  { std::ofstream(path, std::ios::binary | std::ios::app) << "partial"; }
+  {
+    sinew::SkinFrameFile file(path, 4, fields, 4, kept, note);  // restart after step 4: steps 0, 2, 4 stay
+    ASSERT_EQ(kept.size(), 3u);
+    EXPECT_TRUE(note.empty()) << note;
+    EXPECT_EQ(kept[2].step, 4);
+    EXPECT_FLOAT_EQ(kept[2].x[5], 5.0f + 2.0f);
+    EXPECT_FLOAT_EQ(kept[1].fields[0][3], 2.0f);
+    file.append(frame(5, 2.5, 4, 9.0f));
+  }
+  std::vector<std::string> names;
+  const auto all = sinew::read_skin_frames(path, &names);
+  ASSERT_EQ(all.size(), 4u);
+  EXPECT_EQ(names, fields);
+  EXPECT_EQ(all[3].step, 5);
+  EXPECT_DOUBLE_EQ(all[3].time, 2.5);
+  EXPECT_FLOAT_EQ(all[3].x[0], 9.0f);
+  // Another skin (vertex count) or other fields: started anew, with a note.
+  sinew::SkinFrameFile other(path, 5, fields, 4, kept, note);
+  EXPECT_TRUE(kept.empty());
+  EXPECT_NE(note.find("another skin"), std::string::npos) << note;
+  EXPECT_TRUE(sinew::read_skin_frames(path).empty());
+}
+
+TEST(SkinCaches, PointCacheHasThePc2HeaderAndEveryFramesPositions) {
+  sinew::SkinTrack track;
+  track.rest = std::vector<float>(9, 0.0f);
+  track.triangles = {{0, 1, 2}};
+  track.frame_rate = 24.0;
+  track.frames = {frame(0, 0.5, 3, 0.0f), frame(2, 0.75, 3, 1.0f), frame(4, 1.0, 3, 2.0f)};
+  std::filesystem::create_directories("test_results/skin_pc2");
+  sinew::write_pc2("test_results/skin_pc2/skin.pc2", track);
+  const std::vector<char> b = file_bytes("test_results/skin_pc2/skin.pc2");
+  ASSERT_EQ(b.size(), 32u + 3 * 9 * 4);
+  EXPECT_EQ(std::string(b.data(), 12), std::string("POINTCACHE2\0", 12));
+  std::int32_t version, points, samples;
+  float start, sampling;
+  std::memcpy(&version, &b[12], 4);
+  std::memcpy(&points, &b[16], 4);
+  std::memcpy(&start, &b[20], 4);
+  std::memcpy(&sampling, &b[24], 4);
+  std::memcpy(&samples, &b[28], 4);
+  EXPECT_EQ(version, 1);
+  EXPECT_EQ(points, 3);
+  EXPECT_FLOAT_EQ(start, 12.0f);    // 0.5 s at 24 frames per second
+  EXPECT_FLOAT_EQ(sampling, 6.0f);  // 0.25 s between frames
+  EXPECT_EQ(samples, 3);
+  float last;
+  std::memcpy(&last, &b[32 + (2 * 9 + 8) * 4], 4);
+  EXPECT_FLOAT_EQ(last, 8.0f + 2.0f);
+}
+
+TEST(SkinCaches, GlbIsAGltfBinaryWithOneMorphTargetAndOneStepKeyPerFrame) {
+  sinew::SkinTrack track;
+  track.rest = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  track.triangles = {{0, 1, 2}};
+  track.field_names = {"J"};
+  track.frames = {frame(0, 0.0, 3, 0.0f), frame(1, 0.1, 3, 0.5f)};
+  sinew::SkinRig rig;
+  rig.names = {"root", "arm \"left\""};
+  rig.parents = {-1, 0};
+  rig.pose = [](double load) {
+    return std::vector<sinew::Affine>{rotation_scale(0.0, {0, 0, 1}, {1, 1, 1}, {0, 0, 0}),
+                                      rotation_scale(load, {0, 0, 1}, {1, 1, 1}, {1, 0, 0})};
+  };
+  track.rig = &rig;
+  std::filesystem::create_directories("test_results/skin_glb");
+  sinew::write_glb("test_results/skin_glb/skin.glb", track);
+  const std::vector<char> b = file_bytes("test_results/skin_glb/skin.glb");
+  ASSERT_GT(b.size(), 28u);
+  std::uint32_t head[5];
+  std::memcpy(head, b.data(), sizeof head);
+  EXPECT_EQ(head[0], 0x46546C67u);  // "glTF"
+  EXPECT_EQ(head[1], 2u);
+  EXPECT_EQ(head[2], b.size());
+  EXPECT_EQ(head[3] % 4, 0u);
+  EXPECT_EQ(head[4], 0x4E4F534Au);  // "JSON"
+  const std::string json(b.data() + 20, head[3]);
+  std::uint32_t bin[2];
+  std::memcpy(bin, b.data() + 20 + head[3], sizeof bin);
+  EXPECT_EQ(bin[1], 0x004E4942u);  // "BIN"
+  EXPECT_EQ(20 + head[3] + 8 + bin[0], b.size());
+  for (const char* expect : {"\"targets\":[{\"POSITION\":", "\"interpolation\":\"STEP\"", "\"path\":\"weights\"",
+                             "\"name\":\"arm \\\"left\\\"\"", "\"path\":\"rotation\"", "\"sinew_steps\":[0,1]",
+                             "\"targetNames\":[\"step_000000\",\"step_000001\"]", "\"sinew_fields\":{\"J\":"})
+    EXPECT_NE(json.find(expect), std::string::npos) << expect << " not in " << json;
+}

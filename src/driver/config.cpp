@@ -20,6 +20,13 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
     c.params = parse_section<SceneFileParameters>(*params, "the top-level list");
     if (c.params.time.dynamic() && params->isSublist("Loading") && params->sublist("Loading").isParameter("Steps"))
       throw InputError("Loading: 'Steps' does not apply to a dynamic run (Time/Frames and Substeps set the time steps)");
+    // The skin's caches need a skin: the surface a voxelized or rigged body was filled from.
+    if (c.params.mesh.type != "voxelize" && c.params.mesh.type != "rig")
+      for (const auto& [entry, on] : {std::make_pair("Skin glTF", c.params.output.skin_gltf),
+                                      std::make_pair("Skin PC2", c.params.output.skin_pc2)})
+        if (on.value_or(false))
+          throw InputError(std::string("Output: '") + entry + "' needs a skin, which only Mesh/Type voxelize or rig has (this "
+                           "scene's mesh is '" + c.params.mesh.type + "'; its boundary surface is in surface_NNNNNN.obj)");
     // A rig's rest pose is one for the skin and the bones: the Skeleton says it, the Mesh follows.
     if (c.params.skeleton.rest_time >= 0.0) {
       if (c.params.mesh.type != "rig" || c.params.mesh.rig != c.params.skeleton.rig)

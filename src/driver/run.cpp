@@ -89,6 +89,24 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
       for (const auto& v : rig_surface(*skeleton.rig(), meshes, skeleton.rig_pose(load)).vertices) x.insert(x.end(), v.begin(), v.end());
       triangles = mesh.embedded->triangles;
     });
+  // The skin's caches: frames at the clip's times for a rig, at the run's times for dynamics, else one
+  // load step a frame; a rig's nodes animated beside the skin.
+  const double frame_rate = p.time.frame_rate;
+  if (skeleton.rig())
+    out_->set_frame_clock([&skeleton](double load) { return skeleton.rig_seconds(load); }, frame_rate);
+  else if (dynamics_)
+    out_->set_frame_clock([d = dynamics_.get()](double load) { return d->time_of(load); }, frame_rate);
+  else
+    out_->set_frame_clock([steps = scene_->steps(), frame_rate](double load) { return load * steps / frame_rate; }, frame_rate);
+  if (skeleton.rig() && out_->skin_caches()) {
+    SkinRig rig;
+    for (const RigNode& node : skeleton.rig()->nodes) {
+      rig.names.push_back(node.name);
+      rig.parents.push_back(node.parent);
+    }
+    rig.pose = [&skeleton](double load) { return skeleton.rig_pose(load); };
+    out_->set_skin_rig(std::move(rig));
+  }
   talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.
   auto comm_copy = comm_;
@@ -340,6 +358,8 @@ void Simulation::print_summary() const {
   double peak_mb = static_cast<double>(ru.ru_maxrss) / 1024.0, max_mb = 0.0;  // ru_maxrss is in kB on Linux
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, peak_mb, Teuchos::outArg(max_mb));
   const auto& mesh = scene_->system().mesh();
+  const std::string caches = out_->skin_cache_summary();
+  if (talk_ && !caches.empty()) std::printf("%s\n", caches.c_str());
   if (talk_)
     std::printf("done in %.1f s; peak memory %.0f MB per rank (%.0f bytes per DOF); results in %s\n", wall_seconds() - started_,
                 max_mb, max_mb * 1048576.0 * comm_->getSize() / (3.0 * mesh.global_nodes), out_->directory().c_str());
@@ -372,12 +392,14 @@ int Simulation::run() {
       // The last converged state, restartable (e.g. with other solver settings), then its fields.
       if (out.checkpoint_every() > 0) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
       write_step(k, at_.load);
+      out.finish();
       return code(ExitCode::NoConvergence);
     }
     if (outcome == StepOutcome::Stopped) {
       // Interrupted inside step k: checkpoint exactly where the load path stands (possibly inside a cut
       // step), so that a restart continues the same run.
       out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+      out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d during step %d (load %.6g); checkpoint in %s\n", stop_signal_, k,
                      at_.load, out.checkpoint_file().c_str());
@@ -400,12 +422,14 @@ int Simulation::run() {
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
       if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+      out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", stop_signal_, k,
                      out.checkpoint_file().c_str());
       return signal_exit_code(stop_signal_);
     }
   }
+  out.finish();
   print_summary();
   return code(ExitCode::Success);
 }

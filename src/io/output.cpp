@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -34,6 +35,10 @@ using io_detail::replace_durably;
 using io_detail::sync_path;
 
 namespace {
+
+double wall_clock() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 // HDF5 handle; close() reports a failure (a flush that did not reach the disk), the destructor only
 // cleans up on error paths.
@@ -240,13 +245,17 @@ void write_file(const std::string& path, MPI_Comm comm, bool root, Fill&& fill) 
 
 Output::Output(const OutputParameters& params, const System& system, const std::string& name, int steps,
                int restart_step)
-    : params_(params), sys_(system), name_(name), steps_(steps) {
+    : params_(params), sys_(system), name_(name), steps_(steps), restart_step_(restart_step) {
   root_ = system.comm()->getRank() == 0;
+  started_ = wall_clock();
   dir_ = params.directory.empty() ? "results/" + name_ : params.directory;
   try {
     collectively(raw_comm(*system.comm()), [&] {
       if (!root_) return;
       std::error_code ec;
+      if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
+        throw InputError("Output: results folder '" + dir_ + "' is a file, not a folder (name another 'Directory')",
+                         InputErrorKind::File);
       fs::create_directories(dir_, ec);
       if (ec) throw InputError("Output: cannot create results folder '" + dir_ + "': " + ec.message(), InputErrorKind::File);
       // Files a crash left half-written: never read, so remove them (only those Sinew names itself: the
@@ -315,6 +324,96 @@ Output::Output(const OutputParameters& params, const System& system, const std::
   mesh_name_ = mesh_name;
 }
 
+void Output::add_skin_frame(int step, double load, const std::vector<double>& x, const std::vector<double>& J,
+                            const std::vector<std::vector<double>>& sequences) {
+  const EmbeddedSurface& s = *sys_.mesh().embedded;
+  const std::size_t V = s.rest.size();
+  if (!skin_file_) {
+    // Fields: det F at the skin, and the distance to each surface written beside it with the same
+    // vertices (a rig's own linear-blend skin: where the simulation departs from it).
+    skin_fields_ = {"J"};
+    for (std::size_t k = 0; k < sequences_.size(); ++k)
+      if (sequences[k].size() == 3 * V) skin_fields_.push_back(sequences_[k].first + "_distance");
+    std::string note;
+    skin_file_ = std::make_unique<SkinFrameFile>(dir_ + "/skin.frames", V, skin_fields_, restart_step_, skin_frames_, note);
+    if (!note.empty()) std::printf("  output note: %s\n", note.c_str());
+    // The rest skin the point cache applies to (and the glTF file's mesh).
+    std::vector<double> rest;
+    for (const auto& p : s.rest) rest.insert(rest.end(), p.begin(), p.end());
+    if (params_.skin_pc2.value_or(true)) write_obj_file(dir_ + "/skin_rest.obj", rest, s.triangles, "rest skin of skin.pc2");
+    skin_frames_exported_ = 0;
+  }
+  SkinFrame f;
+  f.step = step;
+  f.load = load;
+  f.time = frame_time_ ? frame_time_(load) : load * steps_ / frame_rate_;
+  f.x.assign(x.begin(), x.end());
+  f.fields.emplace_back(J.begin(), J.end());
+  for (std::size_t k = 0; k < sequences_.size(); ++k) {
+    if (sequences[k].size() != 3 * V) continue;
+    std::vector<float> d(V);
+    for (std::size_t v = 0; v < V; ++v) {
+      const double a = x[3 * v] - sequences[k][3 * v], b = x[3 * v + 1] - sequences[k][3 * v + 1], c = x[3 * v + 2] - sequences[k][3 * v + 2];
+      d[v] = static_cast<float>(std::sqrt(a * a + b * b + c * c));
+    }
+    f.fields.push_back(std::move(d));
+  }
+  // Animation times must increase strictly: a frame no later than the last one (the fields of a failed
+  // step written at the last converged load) adds nothing to the caches.
+  if (!skin_frames_.empty() && !(f.time > skin_frames_.back().time)) return;
+  const double t0 = wall_clock();
+  skin_file_->append(f);
+  append_seconds_ += wall_clock() - t0;
+  skin_frames_.push_back(std::move(f));
+  // The exports cost O(frames) each: refresh them while they stay under 2% of the run's time, and
+  // always at the end (finish).
+  if (export_seconds_ <= 0.02 * (wall_clock() - started_) || step == steps_) write_skin_caches();
+}
+
+void Output::write_skin_caches() {
+  if (!root_ || !skin_file_ || skin_frames_exported_ == skin_frames_.size()) return;
+  const double t0 = wall_clock();
+  const EmbeddedSurface& s = *sys_.mesh().embedded;
+  SkinTrack track;
+  track.name = name_;
+  for (const auto& p : s.rest) track.rest.insert(track.rest.end(), p.begin(), p.end());
+  track.triangles = s.triangles;
+  track.field_names = skin_fields_;
+  track.frame_rate = frame_rate_;
+  if (skin_rig_.pose) track.rig = &skin_rig_;
+  // The frames lent to the track, not copied (they may be the largest thing rank 0 holds).
+  track.frames.swap(skin_frames_);
+  try {
+    if (params_.skin_gltf.value_or(true)) write_glb(dir_ + "/skin.glb", track);
+    if (params_.skin_pc2.value_or(true)) write_pc2(dir_ + "/skin.pc2", track);
+  } catch (...) {
+    track.frames.swap(skin_frames_);
+    throw;
+  }
+  track.frames.swap(skin_frames_);
+  skin_frames_exported_ = skin_frames_.size();
+  export_seconds_ += wall_clock() - t0;
+}
+
+void Output::finish() {
+  collectively(raw_comm(*sys_.comm()), [&] { write_skin_caches(); });
+}
+
+std::string Output::skin_cache_summary() const {
+  if (!root_ || !skin_file_) return "";
+  auto mb = [&](const char* f) {
+    std::error_code ec;
+    const auto n = fs::file_size(dir_ + "/" + f, ec);
+    return ec ? 0.0 : static_cast<double>(n) / 1e6;
+  };
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "skin caches: %zu frames of %zu vertices; skin.glb %.1f MB, skin.pc2 %.1f MB, skin.frames %.1f MB; "
+                "%.2f s writing them (%.1f%% of the run)",
+                skin_frames_.size(), sys_.mesh().embedded->rest.size(), mb("skin.glb"), mb("skin.pc2"), mb("skin.frames"),
+                export_seconds_ + append_seconds_, 100.0 * (export_seconds_ + append_seconds_) / std::max(1e-9, wall_clock() - started_));
+  return buf;
+}
+
 std::string Output::step_file(int step) const {
   std::ostringstream os;
   os << dir_ << "/step_" << std::setw(6) << std::setfill('0') << step << ".h5";
@@ -359,29 +458,47 @@ std::string Output::surface_file(int step) const {
   return os.str();
 }
 
+bool Output::skin_caches() const {
+  return sys_.mesh().has_embedded && (params_.skin_gltf.value_or(true) || params_.skin_pc2.value_or(true));
+}
+
+void Output::set_frame_clock(std::function<double(double load)> time, double frame_rate) {
+  frame_time_ = std::move(time);
+  frame_rate_ = frame_rate;
+}
+
 void Output::write_step(int step, double load, const Vector& u, const NodeFields& node_fields) {
-  if (params_.surface && (step % (params_.every * params_.surface_every) == 0 || step == steps_)) {
-    if (!surface_) surface_ = std::make_unique<BoundarySurface>(sys_.mesh(), *sys_.comm());
+  const bool caches = skin_caches();
+  if ((params_.surface || caches) && (step % (params_.every * params_.surface_every) == 0 || step == steps_)) {
     std::ostringstream what;
     what << "step " << step << ", load " << load;
-    surface_->write_obj(surface_file(step), u, what.str());
-    if (sys_.mesh().has_embedded) {  // a voxelized body: its own skin, carried by the lattice
+    if (params_.surface) {
+      if (!surface_) surface_ = std::make_unique<BoundarySurface>(sys_.mesh(), *sys_.comm());
+      surface_->write_obj(surface_file(step), u, what.str());
+    }
+    // A voxelized body: its own skin, carried by the lattice (rank 0 holds it).
+    std::vector<double> skin, J;
+    if (sys_.mesh().has_embedded) {
       if (!skin_) skin_ = std::make_unique<EmbeddedSkin>(sys_.mesh(), u.getMap());
+      skin_->deformed(u, skin, caches ? &J : nullptr);
+    }
+    std::vector<std::vector<double>> sequence_x(sequences_.size());
+    collectively(raw_comm(*sys_.comm()), [&] {
+      if (!root_) return;
       std::ostringstream path;
       path << dir_ << "/skin_" << std::setw(6) << std::setfill('0') << step << ".obj";
-      skin_->write_obj(path.str(), u, what.str());
-    }
-    for (const auto& [prefix, at] : sequences_) {
-      std::ostringstream path;
-      path << dir_ << "/" << prefix << "_" << std::setw(6) << std::setfill('0') << step << ".obj";
-      collectively(raw_comm(*sys_.comm()), [&] {
-        if (!root_) return;
-        std::vector<double> x;
+      if (params_.surface && sys_.mesh().has_embedded) write_obj_file(path.str(), skin, sys_.mesh().embedded->triangles, what.str());
+      for (std::size_t k = 0; k < sequences_.size(); ++k) {
+        const auto& [prefix, at] = sequences_[k];
         std::vector<std::array<int, 3>> triangles;
-        at(load, x, triangles);
-        write_obj_file(path.str(), x, triangles, what.str());
-      });
-    }
+        at(load, sequence_x[k], triangles);
+        if (!params_.surface) continue;
+        std::ostringstream seq;
+        seq << dir_ << "/" << prefix << "_" << std::setw(6) << std::setfill('0') << step << ".obj";
+        write_obj_file(seq.str(), sequence_x[k], triangles, what.str());
+      }
+      if (caches) add_skin_frame(step, load, skin, J, sequence_x);
+    });
   }
   if (!params_.hdf5) return;
   const Mesh& m = sys_.mesh();

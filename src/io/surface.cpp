@@ -1,6 +1,7 @@
 // Boundary surface extraction and OBJ writing (surface.hpp).
 #include <sinew/core/collective.hpp>
 #include <sinew/discretization/boundary.hpp>
+#include <sinew/discretization/shape_functions.hpp>
 #include <sinew/io/surface.hpp>
 
 #include "durable_file.hpp"
@@ -63,23 +64,64 @@ EmbeddedSkin::EmbeddedSkin(const Mesh& mesh, const Teuchos::RCP<const Map>& owne
   const Teuchos::ArrayView<const GO> view(want.data(), static_cast<Teuchos::ArrayView<const GO>::size_type>(want.size()));
   gathered_ = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(), view, 0, owned_dofs->getComm()));
   import_ = Teuchos::rcp(new Import(owned_dofs, gathered_));
+  // The same nodes' reference coordinates, once (for det F at the skin).
+  Vector X(owned_dofs), here(gathered_);
+  {
+    auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+    auto xv = X.getLocalViewHost(Tpetra::Access::OverwriteAll);
+    for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n)
+      for (int d = 0; d < 3; ++d) xv(3 * n + d, 0) = Xh(n, d);
+  }
+  here.doImport(X, *import_, Tpetra::INSERT);
+  auto h = here.getLocalViewHost(Tpetra::Access::ReadOnly);
+  rest_nodes_.assign(h.data(), h.data() + h.extent(0));
+}
+
+void EmbeddedSkin::deformed(const Vector& u, std::vector<double>& x, std::vector<double>* J) const {
+  Vector here(gathered_);
+  here.doImport(u, *import_, Tpetra::INSERT);
+  x.clear();
+  if (J) J->clear();
+  if (!mesh_.embedded) return;
+  const auto& s = *mesh_.embedded;
+  auto h = here.getLocalViewHost(Tpetra::Access::ReadOnly);
+  x.resize(3 * s.rest.size());
+  if (J) J->resize(s.rest.size());
+  for (std::size_t v = 0; v < s.rest.size(); ++v) {
+    for (int d = 0; d < 3; ++d) {
+      double ud = 0.0;
+      for (int a = 0; a < 8; ++a) ud += s.weights[v][a] * h(3 * slot_.at(s.nodes[v][a]) + d, 0);
+      x[3 * v + d] = s.rest[v][d] + ud;
+    }
+    if (!J) continue;
+    // The vertex's reference coordinates in its cell (trilinear weights reproduce linear functions),
+    // then dx/dxi and dX/dxi there: J = det(dx/dxi) / det(dX/dxi). A vertex beyond its cell (its
+    // weights extrapolate) takes the J of the cell's nearest point: the map extrapolated past the cell
+    // is no material's.
+    double xi[3] = {0.0, 0.0, 0.0};
+    for (int a = 0; a < 8; ++a)
+      for (int d = 0; d < 3; ++d) xi[d] += s.weights[v][a] * Hex8::corner(a, d);
+    for (double& c : xi) c = std::clamp(c, -1.0, 1.0);
+    double dN[8][3];
+    Hex8::gradients_at(xi, dN);
+    Mat3 dX = Mat3::zero(), dx = Mat3::zero();
+    for (int a = 0; a < 8; ++a) {
+      const int k = slot_.at(s.nodes[v][a]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          dX(i, j) += rest_nodes_[3 * k + i] * dN[a][j];
+          dx(i, j) += (rest_nodes_[3 * k + i] + h(3 * k + i, 0)) * dN[a][j];
+        }
+    }
+    (*J)[v] = det(dx) / det(dX);
+  }
 }
 
 void EmbeddedSkin::write_obj(const std::string& path, const Vector& u, const std::string& comment) const {
-  Vector here(gathered_);
-  here.doImport(u, *import_, Tpetra::INSERT);
+  std::vector<double> x;
+  deformed(u, x);
   collectively(raw_comm(*gathered_->getComm()), [&] {
-    if (!mesh_.embedded) return;
-    const auto& s = *mesh_.embedded;
-    auto h = here.getLocalViewHost(Tpetra::Access::ReadOnly);
-    std::vector<double> x(3 * s.rest.size());
-    for (std::size_t v = 0; v < s.rest.size(); ++v)
-      for (int d = 0; d < 3; ++d) {
-        double ud = 0.0;
-        for (int a = 0; a < 8; ++a) ud += s.weights[v][a] * h(3 * slot_.at(s.nodes[v][a]) + d, 0);
-        x[3 * v + d] = s.rest[v][d] + ud;
-      }
-    write_obj_file(path, x, s.triangles, comment);
+    if (mesh_.embedded) write_obj_file(path, x, mesh_.embedded->triangles, comment);
   });
 }
 

@@ -303,7 +303,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
 
 std::vector<Affine> Skeleton::rig_pose(double load) const {
   if (!rig_) return {};
-  const double seconds = clip_t0_ + (clip_t1_ - clip_t0_) * load;
+  const double seconds = rig_seconds(load);
   return retarget_ ? retarget_->pose(seconds) : rig_->pose(clip_, seconds);
 }
 

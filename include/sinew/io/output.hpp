@@ -14,6 +14,8 @@
 //   DIR/skin_NNNNNN.obj    a voxelized mesh's input surface carried along by the lattice
 //   DIR/lbs_NNNNNN.obj     a rigged character's skin posed by the file's own linear-blend skinning,
 //                          the same topology as skin_*.obj, for comparison (add_surface_sequence)
+//   DIR/skin.glb, skin.pc2 the skin's frames (those of skin_*.obj) as an animated glTF binary and a
+//   DIR/skin_rest.obj      PC2 point cache of the rest skin, made from DIR/skin.frames (skin_cache.hpp)
 //   DIR/log.csv            one row per converged load step
 //   DIR/newton.csv         one row per Newton iteration (residual, CG iterations, step length)
 //   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
@@ -22,6 +24,7 @@
 #include <sinew/algebra/system.hpp>
 #include <sinew/core/parameters.hpp>
 #include <sinew/core/range.hpp>
+#include <sinew/io/skin_cache.hpp>
 #include <sinew/io/surface.hpp>
 #include <sinew/solver/solve_report.hpp>
 
@@ -30,6 +33,7 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +44,7 @@ struct OutputParameters {
   std::string directory;
   int every = 0, checkpoint_every = 0, surface_every = 0;
   bool hdf5 = true, surface = true;
+  std::optional<bool> skin_gltf, skin_pc2;  // absent: on where the scene has a skin
 
   template <class V>
   void visit(V& v) {
@@ -51,6 +56,12 @@ struct OutputParameters {
             "write the deformed boundary surface with normals as DIR/surface_NNNNNN.obj (for Blender, Houdini, Maya)");
     v.entry("Surface every", surface_every, 1,
             "write the surface at every this-many-th field output (the first and last step always)", Range::at_least(1));
+    v.optional("Skin glTF", skin_gltf,
+               "write the simulated skin as an animated glTF binary, DIR/skin.glb: one morph target per written "
+               "skin frame, the rig's nodes beside it (default: on where the scene has a skin, Mesh/Type voxelize or rig)");
+    v.optional("Skin PC2", skin_pc2,
+               "write the simulated skin as a PC2 point cache, DIR/skin.pc2, for DIR/skin_rest.obj (Blender's Mesh "
+               "Cache modifier, Maya, 3ds Max; default: on where the scene has a skin)");
     v.entry("Checkpoint every", checkpoint_every, 1,
             "write DIR/checkpoint.h5 every this many steps (0: never); sinew --restart continues from it",
             Range::non_negative());
@@ -114,6 +125,17 @@ class Output {
   // gives its vertices (3 coordinates each) and triangles at a load fraction; rank 0 calls it.
   using SurfaceAt = std::function<void(double load, std::vector<double>& x, std::vector<std::array<int, 3>>& triangles)>;
   void add_surface_sequence(const std::string& prefix, SurfaceAt at) { sequences_.emplace_back(prefix, std::move(at)); }
+  // The skin's caches: the time of a frame at a load fraction (default: load x steps / frame rate, one
+  // load step a frame), the frame rate of the PC2's frame numbers, and a rig's nodes to animate beside
+  // the skin in the glTF file. Set before the first write_step.
+  void set_frame_clock(std::function<double(double load)> time, double frame_rate);
+  void set_skin_rig(SkinRig rig) { skin_rig_ = std::move(rig); }
+  bool skin_caches() const;
+  // Collective: brings the skin's glTF and PC2 files up to the last written frame (each write_step
+  // refreshes them only while that costs under 2% of the run's time). Call when the run ends, however.
+  void finish();
+  // Rank 0: "skin caches: F frames of V vertices; sizes; seconds writing them" (empty without caches).
+  std::string skin_cache_summary() const;
   // Collective: rank 0 appends a row to log.csv; a failed write is an error on every rank.
   void log(const StepRecord& r);
   // Rank 0 appends a row to newton.csv (`load`: the load fraction being solved for).
@@ -173,6 +195,19 @@ class Output {
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
   std::vector<std::pair<std::string, SurfaceAt>> sequences_;
   std::ofstream log_, newton_log_;
+  // The skin's caches (rank 0 holds the frames).
+  void add_skin_frame(int step, double load, const std::vector<double>& x, const std::vector<double>& J,
+                      const std::vector<std::vector<double>>& sequences);
+  void write_skin_caches();
+  int restart_step_ = -1;
+  std::function<double(double)> frame_time_;
+  double frame_rate_ = 24.0;
+  SkinRig skin_rig_;
+  std::unique_ptr<SkinFrameFile> skin_file_;
+  std::vector<SkinFrame> skin_frames_;
+  std::vector<std::string> skin_fields_;
+  std::size_t skin_frames_exported_ = 0;
+  double started_ = 0.0, export_seconds_ = 0.0, append_seconds_ = 0.0;
 };
 
 }  // namespace sinew

@@ -47,6 +47,9 @@ class EmbeddedSkin {
  public:
   // Collective.
   EmbeddedSkin(const Mesh& mesh, const Teuchos::RCP<const Map>& owned_dofs);
+  // Collective: rank 0 gets the deformed skin x (3 per vertex) and, with J given, det F at each vertex
+  // from its cell's trilinear map (the volume change the skin sits in); other ranks get nothing.
+  void deformed(const Vector& u, std::vector<double>& x, std::vector<double>* J = nullptr) const;
   // Collective.
   void write_obj(const std::string& path, const Vector& u, const std::string& comment) const;
 
@@ -55,6 +58,7 @@ class EmbeddedSkin {
   Teuchos::RCP<const Map> gathered_;
   Teuchos::RCP<const Import> import_;
   std::map<GlobalId, int> slot_;  // rank 0: a node's place among the gathered ones
+  std::vector<double> rest_nodes_;  // rank 0: the gathered nodes' reference coordinates, in slot order
 };
 
 }  // namespace sinew

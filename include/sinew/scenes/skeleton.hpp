@@ -160,6 +160,8 @@ class Skeleton {
   // of the file is written beside the simulated one; the retargeting's scale (0 without).
   const RigFile* rig() const { return rig_.get(); }
   std::vector<Affine> rig_pose(double load) const;
+  // The clip's time, in seconds, at a load fraction (of the retargeted clip when retargeting).
+  double rig_seconds(double load) const { return clip_t0_ + (clip_t1_ - clip_t0_) * load; }
   double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
 
  private:
