@@ -1,22 +1,24 @@
 #!/usr/bin/env bash
 # Sinew's performance suite: one command, a JSON file, a Markdown table and PNG plots.
-#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--quick]
+#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--skin-caches] [--quick]
 # --large adds the paper's stretch at its resolution (58x58x116 cells, 969k DOFs, all 12 steps; about
 # 10 minutes); --character the paper-scale human (inputs/human.xml, 48k cells) with Stable Neo-Hookean
 # and with corotational, its whole crouch, and SNH with the preconditioner updated at every Newton
-# iteration (about 9 minutes); --quick uses the smallest sizes only.
+# iteration (about 9 minutes); --skin-caches what writing the skin's glTF and PC2 caches costs on a
+# 4,902-vertex skin over 101 frames (sizes and seconds); --quick uses the smallest sizes only.
 # Timings on a shared machine are noisy: the report gives the best of a few repetitions where it can.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/.." && pwd)
 out=$repo/results/perf
-large=0 quick=0 character=0
+large=0 quick=0 character=0 skin_caches=0
 build_args=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) out=$2; shift 2 ;;
     --large) large=1; shift ;;
     --character) character=1; shift ;;
+    --skin-caches) skin_caches=1; shift ;;
     --quick) quick=1; shift ;;
     --deps-cache|--build-dir) build_args+=("$1" "$2"); shift 2 ;;
     -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
@@ -119,6 +121,60 @@ if [ $character -eq 1 ]; then
        s/<Parameter name="Clip end" type="double" value="1.4"\/>/<Parameter name="Clip end" type="double" value="1.9"\/>/' \
     "$repo/inputs/human.xml" > "$out/scenes/human_crease.xml"
   scene human_crease_1x2 "$out/scenes/human_crease.xml" 1 2
+fi
+
+# The skin's caches (issue 43): a UV sphere of 4,902 vertices voxelized with 1 cm cells and squeezed
+# over 100 steps, every step written (101 frames); the run prints the caches' sizes and the seconds
+# spent writing them (skin.frames appended per frame, skin.glb and skin.pc2 rebuilt).
+if [ $skin_caches -eq 1 ]; then
+  mkdir -p "$out/scenes"
+  /usr/bin/python3 - "$out/scenes/sphere_5k.obj" <<'PY'
+import math, sys
+rings, segments, r = 50, 100, 0.1
+v = [(0, 0, r)] + [(r * math.sin(math.pi * i / rings) * math.cos(2 * math.pi * j / segments),
+                    r * math.sin(math.pi * i / rings) * math.sin(2 * math.pi * j / segments),
+                    r * math.cos(math.pi * i / rings)) for i in range(1, rings) for j in range(segments)] + [(0, 0, -r)]
+f = [(1, 2 + j, 2 + (j + 1) % segments) for j in range(segments)]
+for i in range(rings - 2):
+    for j in range(segments):
+        a, b = 2 + i * segments + j, 2 + i * segments + (j + 1) % segments
+        f += [(a, a + segments, b), (b, a + segments, b + segments)]
+last = len(v)
+f += [(last, 2 + (rings - 2) * segments + (j + 1) % segments, 2 + (rings - 2) * segments + j) for j in range(segments)]
+with open(sys.argv[1], "w") as out:
+    out.writelines(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in v)
+    out.writelines(f"f {a} {b} {c}\n" for a, b, c in f)
+PY
+  cat > "$out/scenes/skin_cache_5k.xml" <<'XML'
+<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="skin_cache_5k"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="voxelize"/>
+    <Parameter name="Surface" type="string" value="sphere_5k.obj"/>
+    <Parameter name="Cell size" type="double" value="0.01"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1.0e4"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value="100"/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="bottom"><Parameter name="Region" type="string" value="face z-"/></ParameterList>
+      <ParameterList name="top">
+        <Parameter name="Region" type="string" value="face z+"/>
+        <Parameter name="Motion" type="string" value="translate"/>
+        <Parameter name="Displacement" type="Array(double)" value="{0, 0, -0.05}"/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/></ParameterList>
+</ParameterList>
+XML
+  log "skin caches: 4,902-vertex skin, 100 steps"
+  omp 2 "$build/sinew" --output "$out/skin_cache_5k" "$out/scenes/skin_cache_5k.xml" > "$out/skin_cache_5k.log"
+  grep -E "^skin caches|^done" "$out/skin_cache_5k.log" | tee "$out/skin_caches.txt"
 fi
 
 log "report"

@@ -10,13 +10,7 @@ import struct
 import sys
 
 import bpy
-import numpy
 from mathutils import kdtree
-
-# Debian 12's Blender 3.4 glTF importer uses numpy.bool, which Debian's numpy 1.24 no longer has
-# (set_poly_smoothing fails on any mesh with normals): the alias it meant, restored for the importer.
-if "bool" not in numpy.__dict__:
-    numpy.bool = bool
 
 TOL = 1e-5
 
@@ -70,7 +64,9 @@ rest = read_obj(os.path.join(results, "skin_rest.obj"))
 
 # 1. glTF: Blender turns glTF's Y-up into its Z-up, (x, y, z) -> (x, -z, y).
 clear()
-bpy.ops.import_scene.gltf(filepath=os.path.join(results, "skin.glb"), merge_vertices=False)
+# Shading "Smooth", as the import dialog offers it: Debian 12's Blender 3.4 fails with its default,
+# "Normals", on any mesh with normals (its importer calls numpy.bool, which Debian's numpy 1.24 lacks).
+bpy.ops.import_scene.gltf(filepath=os.path.join(results, "skin.glb"), merge_vertices=False, import_shading="SMOOTH")
 skin = next(o for o in bpy.context.scene.objects if o.type == "MESH")
 keys = skin.data.shape_keys
 if keys is None or len(keys.key_blocks) != len(written) + 1:
