@@ -341,12 +341,14 @@ void Output::add_skin_frame(int step, double load, const std::vector<double>& x,
     std::vector<double> rest;
     for (const auto& p : s.rest) rest.insert(rest.end(), p.begin(), p.end());
     if (params_.skin_pc2.value_or(true)) write_obj_file(dir_ + "/skin_rest.obj", rest, s.triangles, "rest skin of skin.pc2");
-    skin_frames_exported_ = 0;
   }
   SkinFrame f;
   f.step = step;
   f.load = load;
   f.time = frame_time_ ? frame_time_(load) : load * steps_ / frame_rate_;
+  // Animation times must increase strictly: a frame no later than the last one (the fields of a failed
+  // step written at the last converged load) adds nothing to the caches.
+  if (!skin_frames_.empty() && !(f.time > skin_frames_.back().time)) return;
   f.x.assign(x.begin(), x.end());
   f.fields.emplace_back(J.begin(), J.end());
   for (std::size_t k = 0; k < sequences_.size(); ++k) {
@@ -358,9 +360,6 @@ void Output::add_skin_frame(int step, double load, const std::vector<double>& x,
     }
     f.fields.push_back(std::move(d));
   }
-  // Animation times must increase strictly: a frame no later than the last one (the fields of a failed
-  // step written at the last converged load) adds nothing to the caches.
-  if (!skin_frames_.empty() && !(f.time > skin_frames_.back().time)) return;
   const double t0 = wall_clock();
   skin_file_->append(f);
   append_seconds_ += wall_clock() - t0;
