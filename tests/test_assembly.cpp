@@ -94,7 +94,7 @@ TEST(Mesh, ColouredChunksShareNoNodeWithinAColourAndKeepEveryElementOnce) {
 
 TEST(Mesh, VoxelCylinder) {
   MeshSpec s;
-  s.shape = "cylinder";
+  s.shape = MeshType::Cylinder;
   s.cells = {8, 8, 6};
   s.lower = {-1, -1, 0};
   s.upper = {1, 1, 3};

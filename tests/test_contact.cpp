@@ -40,7 +40,7 @@ MaterialSpec snh(double E = 1000.0, double nu = 0.45) {
 
 Mesh two_blocks() {
   MeshParameters p = default_section<MeshParameters>();
-  p.type = "file";
+  p.type = MeshType::File;
   p.file = meshes + "two_blocks.msh";
   return build_scene_mesh(p, *world());
 }

@@ -327,7 +327,7 @@ TEST(Solve, AFailedSolveIsRetriedWithProjectionOnlyWhenTheExactHessianWasUsed) {
     c.params.loading.max_cuts = 0;
     // The counts are the Hessian policy's: no iteration redone for a kept preconditioner (on 2 ranks one
     // is, and the exact Hessian comes an iteration later).
-    c.params.solver.update = "every Newton iteration";
+    c.params.solver.update = SolverParameters::Update::EveryNewtonIteration;
     Scene scene(c.scene(), world());
     NonlinearSolver solver(scene.system(), c.params.solver);
     auto u = scene.system().create_vector();
@@ -462,7 +462,7 @@ TEST(Solve, ACheckpointInsideACutStepRestartsTheSameRun) {
   // 3e-9 measured).
   auto make = [](const std::string& dir) {
     SceneConfig c = config(twist_xml(1.5, 1, "hex8"), dir);
-    c.params.solver.update = "every Newton iteration";
+    c.params.solver.update = SolverParameters::Update::EveryNewtonIteration;
     c.params.solver.max_iterations = 6;
     c.params.solver.absolute_tolerance = 1e-8;
     // The path measured above; with the node relaxation the full increment converges in 6 (no cut).

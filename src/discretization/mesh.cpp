@@ -15,6 +15,12 @@ namespace sinew {
 
 std::string to_string(ElementType t) { return t == ElementType::Hex8 ? "hex8" : "tet4"; }
 
+std::string to_string(MeshType t) {
+  for (const auto& [name, value] : mesh_type_choices())
+    if (value == t) return name;
+  return "?";
+}
+
 MeshSpec lattice_spec(const MeshParameters& p) {
   MeshSpec s;
   s.shape = p.type;
@@ -22,7 +28,7 @@ MeshSpec lattice_spec(const MeshParameters& p) {
   s.cells = p.cells;
   s.jitter = p.jitter;
   s.jitter_seed = p.jitter_seed;
-  if (p.type == "box") {
+  if (p.type == MeshType::Box) {
     s.lower = p.lower;
     s.upper = p.upper;
   } else {
@@ -52,7 +58,7 @@ Pattern make_pattern(const MeshSpec& s) {
   for (int j = 0; j < p.ny; ++j) {
     for (int i = 0; i < p.nx; ++i) {
       bool active = true;
-      if (s.shape == "cylinder") {  // cell centre inside the inscribed ellipse of the x-y box
+      if (s.shape == MeshType::Cylinder) {  // cell centre inside the inscribed ellipse of the x-y box
         const double u = (i + 0.5) / p.nx * 2.0 - 1.0, v = (j + 0.5) / p.ny * 2.0 - 1.0;
         active = u * u + v * v <= 1.0;
       }
@@ -174,7 +180,7 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
       }
   }
   Kokkos::deep_copy(m.conn, Ch);
-  m.source = spec.shape + " lattice";
+  m.source = to_string(spec.shape) + " lattice";
   number_for_output(m, comm);
   return m;
 }

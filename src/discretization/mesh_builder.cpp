@@ -8,14 +8,14 @@
 namespace sinew {
 
 Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
-  if (p.type != "file" && p.type != "voxelize" && p.type != "rig") return build_mesh(lattice_spec(p), comm);
+  if (p.type == MeshType::Box || p.type == MeshType::Cylinder) return build_mesh(lattice_spec(p), comm);
   MeshFile file;
   std::shared_ptr<EmbeddedSurface> skin;
-  if (p.type == "voxelize" || p.type == "rig") {  // rank 0 fills the surface with cells, then it is distributed like a file
+  if (has_skin(p.type)) {  // rank 0 fills the surface with cells, then it is distributed like a file
     collectively(raw_comm(comm), [&] {
       if (comm.getRank() != 0) return;
       TriangleSurface surface;
-      if (p.type == "rig") {
+      if (p.type == MeshType::Rig) {
         const RigFile rig = read_rig_file(p.rig);
         const RigClip* clip = p.rig_rest_time >= 0.0 ? rig.clip(p.rig_rest_clip) : nullptr;
         if (p.rig_rest_time >= 0.0 && !clip) throw InputError(p.rig + ": no clip '" + p.rig_rest_clip + "' for the rest pose");
@@ -23,9 +23,9 @@ Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
       } else {
         surface = read_triangle_surface(p.surface);
       }
-      Lattice lattice = voxelize(surface, p.cell_size, p.type == "rig" ? InsideRule::Winding : InsideRule::Parity);
+      Lattice lattice = voxelize(surface, p.cell_size, p.type == MeshType::Rig ? InsideRule::Winding : InsideRule::Parity);
       long long far = 0;
-      skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice, p.type == "rig" ? &far : nullptr));
+      skin = std::make_shared<EmbeddedSurface>(embed(surface, lattice, p.type == MeshType::Rig ? &far : nullptr));
       if (far > 0)
         lattice.mesh.notes.push_back(std::to_string(far) + " of " + std::to_string(surface.vertices.size()) +
                                      " skin vertices lie more than two cells from the lattice (parts thinner than a cell); "

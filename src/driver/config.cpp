@@ -21,15 +21,15 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
     if (c.params.time.dynamic() && params->isSublist("Loading") && params->sublist("Loading").isParameter("Steps"))
       throw InputError("Loading: 'Steps' does not apply to a dynamic run (Time/Frames and Substeps set the time steps)");
     // The skin's caches need a skin: the surface a voxelized or rigged body was filled from.
-    if (c.params.mesh.type != "voxelize" && c.params.mesh.type != "rig")
+    if (!has_skin(c.params.mesh.type))
       for (const auto& [entry, on] : {std::make_pair("Skin glTF", c.params.output.skin_gltf),
                                       std::make_pair("Skin PC2", c.params.output.skin_pc2)})
         if (on.value_or(false))
           throw InputError(std::string("Output: '") + entry + "' needs a skin, which only Mesh/Type voxelize or rig has (this "
-                           "scene's mesh is '" + c.params.mesh.type + "'; its boundary surface is in surface_NNNNNN.obj)");
+                           "scene's mesh is '" + to_string(c.params.mesh.type) + "'; its boundary surface is in surface_NNNNNN.obj)");
     // A rig's rest pose is one for the skin and the bones: the Skeleton says it, the Mesh follows.
     if (c.params.skeleton.rest_time >= 0.0) {
-      if (c.params.mesh.type != "rig" || c.params.mesh.rig != c.params.skeleton.rig)
+      if (c.params.mesh.type != MeshType::Rig || c.params.mesh.rig != c.params.skeleton.rig)
         throw InputError("Skeleton: 'Rest time' needs Mesh/Type rig with the same 'Rig' file (the skin is voxelized in that pose)");
       // (Retargeting: the skeleton's clip is the other file's; the rest is a frame of the rig's first.)
       c.params.mesh.rig_rest_clip = c.params.skeleton.retarget.empty() ? c.params.skeleton.clip : "";
@@ -64,9 +64,9 @@ void check_mesh_file(const SceneConfig& c) {
   const SceneFileParameters& p = c.params;
   try {
     // Closed surfaces (a voxelized body, 'inside' regions) are small: read and check them whole.
-    if (p.mesh.type == "voxelize") read_triangle_surface(p.mesh.surface);
+    if (p.mesh.type == MeshType::Voxelize) read_triangle_surface(p.mesh.surface);
     // A rig: the file, the meshes named as the flesh, the clip named for the bones.
-    if (p.mesh.type == "rig") {
+    if (p.mesh.type == MeshType::Rig) {
       try {
         const RigFile rig = read_rig_file(p.mesh.rig);
         rig_surface(rig, p.mesh.rig_meshes, p.mesh.rig_rest_time >= 0.0 ? rig.clip(p.mesh.rig_rest_clip) : nullptr, p.mesh.rig_rest_time);
@@ -116,7 +116,7 @@ void check_mesh_file(const SceneConfig& c) {
   } catch (const InputError& e) {
     throw e.prefixed(c.file + ": ");
   }
-  if (p.mesh.type != "file") return;
+  if (p.mesh.type != MeshType::File) return;
   try {
     const MeshGroups g = read_mesh_groups(p.mesh.file);
     for (const auto& [region, law] : p.material.regions)
@@ -155,15 +155,15 @@ std::string describe(const SceneConfig& c) {
   os.precision(6);
   os << "scene: " << p.scene << " (" << c.file << ")\n";
   if (!p.description.empty()) os << "  " << p.description << "\n";
-  if (p.mesh.type == "file")
+  if (p.mesh.type == MeshType::File)
     os << "mesh: file " << p.mesh.file << "\n";
-  else if (p.mesh.type == "voxelize")
+  else if (p.mesh.type == MeshType::Voxelize)
     os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling " << p.mesh.surface << "\n";
-  else if (p.mesh.type == "rig")  // with what the file holds (meshes, joints, clips), to choose from
+  else if (p.mesh.type == MeshType::Rig)  // with what the file holds (meshes, joints, clips), to choose from
     os << "mesh: hex8 cells of size " << p.mesh.cell_size << " filling the skin of " << p.mesh.rig << "\n"
        << indented(describe(read_rig_file(p.mesh.rig)));
   else
-    os << "mesh: " << p.mesh.type << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
+    os << "mesh: " << to_string(p.mesh.type) << ", " << to_string(p.mesh.element) << ", " << p.mesh.cells[0] << " x " << p.mesh.cells[1]
        << " x " << p.mesh.cells[2] << " cells\n";
   os << "material: " << describe(p.material.law.spec()) << "\n";
   for (const auto& [region, law] : p.material.regions) os << "  region " << region << ": " << describe(law.spec()) << "\n";
@@ -213,8 +213,9 @@ std::string describe(const SceneConfig& c) {
     }
   }
   os << "solver: |F| < " << p.solver.absolute_tolerance << ", at most " << p.solver.max_iterations
-     << " Newton iterations, line search " << p.solver.line_search << " on the " << p.solver.merit << ", CG with "
-     << p.solver.preconditioner << "\n";
+     << " Newton iterations, line search " << nox_name(p.solver.line_search) << " on the "
+     << (p.solver.merit == SolverParameters::Merit::Energy ? "energy" : "residual") << ", CG with "
+     << stratimikos_name(p.solver.preconditioner) << "\n";
   os << "output: " << (p.output.directory.empty() ? "results/" + p.scene : p.output.directory) << "\n";
   return os.str();
 }

@@ -82,7 +82,7 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   // carries the skin as voxelized; rank 0, which calls this, holds it).
   const Skeleton& skeleton = scene_->skeleton();
   const Mesh& mesh = scene_->system().mesh();
-  if (p.mesh.type == "rig" && skeleton.rig() && p.mesh.rig == p.skeleton.rig)
+  if (p.mesh.type == MeshType::Rig && skeleton.rig() && p.mesh.rig == p.skeleton.rig)
     out_->add_surface_sequence("lbs", [&skeleton, &mesh, meshes = p.mesh.rig_meshes](double load, std::vector<double>& x,
                                                                                      std::vector<std::array<int, 3>>& triangles) {
       x.clear();

@@ -610,11 +610,11 @@ struct NonlinearSolver::Impl {
   // the next step's initial guess, whose boundary nodes have already jumped), and whether the next step
   // keeps the hierarchy.
   void after_solve(const SolveReport& r, const Vector& u) {
-    if (r.converged() && nullspace && params.near_null_space == "current") {
+    if (r.converged() && nullspace && params.near_null_space == SolverParameters::NearNullSpace::Current) {
       sys.fill_coordinates(*coordinates, &u);
       sys.fill_rigid_body_modes(*nullspace, &u);
     }
-    if (params.rebuild == "every step" || !r.converged()) return rebuild_next();
+    if (params.rebuild == SolverParameters::Rebuild::EveryStep || !r.converged()) return rebuild_next();
     if (r.newton_iterations == 0) return;
     const double cg = static_cast<double>(r.linear_iterations) / r.newton_iterations;
     if (cg_per_newton_after_rebuild == 0.0)
@@ -646,7 +646,7 @@ struct NonlinearSolver::Impl {
       : sys(s), params(p), lag(false, p.update_factor) {
     MPI_Comm_dup(raw_comm(*s.comm()), &error_comm);
     nox = default_nox(s.comm()->getRank());
-    nox.sublist("Line Search").set("Method", p.line_search);
+    nox.sublist("Line Search").set("Method", std::string(nox_name(p.line_search)));
     nox.sublist("Line Search").sublist("Polynomial").set("Recovery Step", 0.0);
     nox.sublist("Line Search").sublist("More'-Thuente").set("Recovery Step", 0.0);
     // The slope along the direction from the merit function (F . dir, exact for the energy) or a
@@ -654,7 +654,7 @@ struct NonlinearSolver::Impl {
     // a Jacobian it has not computed ("Jacobian is not valid"), and assembling one per trial is waste.
     nox.sublist("Line Search").sublist("More'-Thuente").set("Optimize Slope Calculation", true);
     auto& newton = nox.sublist("Direction").sublist("Newton");
-    newton.set("Forcing Term Method", p.forcing);
+    newton.set("Forcing Term Method", std::string(nox_name(p.forcing)));
     newton.sublist("Linear Solver").set("Tolerance", p.linear_tolerance);
     // Eisenstat-Walker: the first solve to 1e-2, later ones from the residual's progress, kept within
     // [Linear tolerance, 1e-2] (NOX's default floor, 1e-6, would solve tighter than the constant term).
@@ -670,10 +670,10 @@ struct NonlinearSolver::Impl {
     overlay(nox, p.nox);
 
     auto strat = Teuchos::rcp(new Teuchos::ParameterList(default_stratimikos()));
-    strat->set("Preconditioner Type", p.preconditioner);
+    strat->set("Preconditioner Type", std::string(stratimikos_name(p.preconditioner)));
     overlay(*strat, p.stratimikos);
     // Without a preconditioner there is nothing to keep (and a redone iteration would repeat itself).
-    lag = PreconditionerLag(p.update == "when needed" && strat->get<std::string>("Preconditioner Type") != "None",
+    lag = PreconditionerLag(p.update == SolverParameters::Update::WhenNeeded && strat->get<std::string>("Preconditioner Type") != "None",
                             p.update_factor);
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
       auto& mlist = strat->sublist("Preconditioner Types").sublist("MueLu");
@@ -730,9 +730,11 @@ void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->in
 
 SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
   const Vector start(u, Teuchos::Copy);
-  const std::string& inv = impl_->params.inverted;
-  const auto inverted = inv == "exact" ? HessianPolicy::Inverted::Exact
-                        : inv == "per point" ? HessianPolicy::Inverted::PerPoint : HessianPolicy::Inverted::WholeMesh;
+  using Inverted = SolverParameters::Inverted;
+  const Inverted inv = impl_->params.inverted;
+  const auto inverted = inv == Inverted::Exact      ? HessianPolicy::Inverted::Exact
+                        : inv == Inverted::PerPoint ? HessianPolicy::Inverted::PerPoint
+                                                    : HessianPolicy::Inverted::WholeMesh;
   SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted));
   if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used) {
     // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
@@ -762,7 +764,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   auto params = Teuchos::rcp(new Teuchos::ParameterList(m.nox));
   auto observer = Teuchos::rcp(new ProgressObserver(progress, m.interrupt, *m.model));
   params->sublist("Solver Options").set<Teuchos::RCP<NOX::Observer>>("Observer", observer);
-  if (p.merit == "energy") {
+  if (p.merit == SolverParameters::Merit::Energy) {
     params->sublist("Solver Options")
         .set<Teuchos::RCP<NOX::MeritFunction::Generic>>("User Defined Merit Function", Teuchos::rcp(new EnergyMerit(*m.model)));
     auto& ls = params->sublist("Line Search");

@@ -35,9 +35,25 @@ inline const Choices<ElementType>& element_choices() {
   return c;
 }
 
+// Where a scene's mesh comes from: a lattice Sinew generates (box, cylinder), a mesh file, or a lattice
+// filling a closed surface (voxelize) or a rigged character's skin (rig).
+enum class MeshType { Box, Cylinder, File, Voxelize, Rig };
+std::string to_string(MeshType t);
+inline const Choices<MeshType>& mesh_type_choices() {
+  static const Choices<MeshType> c = {{"box", MeshType::Box},
+                                      {"cylinder", MeshType::Cylinder},
+                                      {"file", MeshType::File},
+                                      {"voxelize", MeshType::Voxelize},
+                                      {"rig", MeshType::Rig}};
+  return c;
+}
+// A lattice fills a surface (and carries it along as the skin): voxelize and rig.
+inline bool has_skin(MeshType t) { return t == MeshType::Voxelize || t == MeshType::Rig; }
+
 // The "Mesh" section of a scene.
 struct MeshParameters {
-  std::string type, file, surface, rig, rig_meshes;
+  MeshType type = MeshType::Box;
+  std::string file, surface, rig, rig_meshes;
   double cell_size = 0.0;
   // Not entries: the scene sets them from Skeleton/Clip and Skeleton/Rest time (the pose a rig's skin is
   // voxelized in; rest_time < 0: the bind pose).
@@ -51,8 +67,7 @@ struct MeshParameters {
 
   template <class V>
   void visit(V& v) {
-    v.choice("Type", type, std::string("box"),
-             Choices<std::string>{{"box", "box"}, {"cylinder", "cylinder"}, {"file", "file"}, {"voxelize", "voxelize"}, {"rig", "rig"}},
+    v.choice("Type", type, MeshType::Box, mesh_type_choices(),
              "box or cylinder (lattices Sinew generates; the cylinder voxelized, axis along z), file, voxelize "
              "(a hex8 lattice filling a closed surface), or rig (a hex8 lattice filling a rigged character's skin)");
     v.entry("File", file, std::string(""),
@@ -81,7 +96,7 @@ struct MeshParameters {
   }
   template <class Context>
   void check(const Context& c) const {
-    if (type == "file") {
+    if (type == MeshType::File) {
       if (file.empty()) c.fail("missing entry 'File' (the mesh file of Type file)", InputErrorKind::MissingEntry);
       for (const char* lattice_only : {"Element", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter",
                                        "Jitter seed", "Surface", "Cell size", "Rig", "Rig meshes"})
@@ -89,7 +104,7 @@ struct MeshParameters {
           c.fail("'" + std::string(lattice_only) + "' applies to generated meshes, not to Type file (the file says it)");
       return;
     }
-    if (type == "rig") {
+    if (type == MeshType::Rig) {
       if (rig.empty()) c.fail("missing entry 'Rig' (the rigged character whose skin to fill)", InputErrorKind::MissingEntry);
       if (!(cell_size > 0.0)) c.fail("missing entry 'Cell size' (> 0) of the voxel lattice", InputErrorKind::MissingEntry);
       for (const char* other : {"File", "Surface", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
@@ -98,7 +113,7 @@ struct MeshParameters {
       return;
     }
     if (c.given("Rig") || c.given("Rig meshes")) c.fail("'Rig' and 'Rig meshes' apply to Type rig only");
-    if (type == "voxelize") {
+    if (type == MeshType::Voxelize) {
       if (surface.empty()) c.fail("missing entry 'Surface' (the closed surface to voxelize)", InputErrorKind::MissingEntry);
       if (!(cell_size > 0.0)) c.fail("missing entry 'Cell size' (> 0) of the voxel lattice", InputErrorKind::MissingEntry);
       for (const char* other : {"File", "Elements", "Lower corner", "Upper corner", "Radius", "Length", "Jitter", "Jitter seed"})
@@ -110,13 +125,13 @@ struct MeshParameters {
     if (c.given("File")) c.fail("'File' applies to Type file only");
     if (!c.given("Elements")) c.fail("missing entry 'Elements' (cells along x, y, z)", InputErrorKind::MissingEntry);
     for (int k = 0; k < 3; ++k)
-      if (type == "box" && !(upper[k] > lower[k])) c.fail("'Upper corner' must exceed 'Lower corner' in every coordinate");
+      if (type == MeshType::Box && !(upper[k] > lower[k])) c.fail("'Upper corner' must exceed 'Lower corner' in every coordinate");
   }
 };
 
 // A lattice: an extruded 2D mask of cells over a bounding box.
 struct MeshSpec {
-  std::string shape = "box";  // box | cylinder
+  MeshType shape = MeshType::Box;  // Box or Cylinder
   ElementType element = ElementType::Hex8;
   std::array<int, 3> cells{{4, 4, 4}};  // box: cells per axis; cylinder: cells across the diameter (x, y), along z
   std::array<double, 3> lower{{0, 0, 0}}, upper{{1, 1, 1}};  // box corners; cylinder: its bounding box

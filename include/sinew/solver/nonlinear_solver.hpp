@@ -21,10 +21,24 @@ namespace sinew {
 
 // The "Solver" section of a scene.
 struct SolverParameters {
+  enum class LineSearch { Backtrack, Polynomial, MoreThuente, FullStep };
+  enum class Merit { Energy, Residual };
+  enum class Forcing { Constant, Type1, Type2 };
+  enum class Preconditioner { MueLu, None };
+  enum class NearNullSpace { Reference, Current };
+  enum class Rebuild { WhenNeeded, EveryStep };
+  enum class Update { WhenNeeded, EveryNewtonIteration };
+  enum class Inverted { Exact, PerPoint, WholeMesh };
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
   int max_iterations = 0;
-  std::string line_search, merit, forcing, preconditioner;  // NOX's / Stratimikos' own names
-  std::string near_null_space, rebuild, update, inverted;
+  LineSearch line_search = LineSearch::Backtrack;
+  Merit merit = Merit::Energy;
+  Forcing forcing = Forcing::Type2;
+  Preconditioner preconditioner = Preconditioner::MueLu;
+  NearNullSpace near_null_space = NearNullSpace::Reference;
+  Rebuild rebuild = Rebuild::WhenNeeded;
+  Update update = Update::WhenNeeded;
+  Inverted inverted = Inverted::Exact;
   double rebuild_factor = 0.0, update_factor = 0.0, max_step = 0.0, node_relaxation = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
@@ -37,11 +51,11 @@ struct SolverParameters {
             "also converged when the residual norm falls below this times the step's first (0: off)",
             Range::closed_open(0.0, 1.0));
     v.entry("Maximum iterations", max_iterations, 50, "Newton iterations per load step", Range::closed(1, 1e6));
-    v.choice("Line search", line_search, std::string("Backtrack"),
-             Choices<std::string>{{"backtrack", "Backtrack"},
-                                  {"polynomial", "Polynomial"},
-                                  {"more-thuente", "More'-Thuente"},
-                                  {"full-step", "Full Step"}},
+    v.choice("Line search", line_search, LineSearch::Backtrack,
+             Choices<LineSearch>{{"backtrack", LineSearch::Backtrack},
+                                 {"polynomial", LineSearch::Polynomial},
+                                 {"more-thuente", LineSearch::MoreThuente},
+                                 {"full-step", LineSearch::FullStep}},
              "line search along each Newton direction (backtrack: on the energy, with NOX's Backtrack settings)");
     // Default 2, measured against 1 (nonlinear_solver.cpp, EnergyBacktrack::extend): scramble 350 -> 201
     // Newton iterations, drop 48 -> 38, squash 1,535 -> 1,502, the crouch's steps 5-9 110 -> 92, the 30^3
@@ -65,8 +79,7 @@ struct SolverParameters {
             "every Newton step. Not with contact or inertia, not next to an inverted point, never inverting "
             "one, and not while more than 0.1% of the points are inverted (0: off)",
             Range::closed_open(0.0, 1.0));
-    v.choice("Line search merit", merit, std::string("energy"),
-             Choices<std::string>{{"energy", "energy"}, {"residual", "residual"}},
+    v.choice("Line search merit", merit, Merit::Energy, Choices<Merit>{{"energy", Merit::Energy}, {"residual", Merit::Residual}},
              "what the line search decreases: the total energy, or 0.5 |F|^2");
     v.entry("Linear tolerance", linear_tolerance, 1e-4,
             "relative CG tolerance of each Newton step with a constant forcing term, and the tightest an "
@@ -76,19 +89,19 @@ struct SolverParameters {
     // 2 threads, same end states: twist 5.1 -> 3.4 s, arm 6.3 -> 4.6, voxel arm 12.0 -> 8.4, arm with
     // contact 17.4 -> 11.3, stretch 66.4 -> 59.3, squash 31.1 -> 27.6, the 48k-cell rig human 124.6 ->
     // 68.3 (CG per Newton 24.4 -> 13.9); Newton iterations: -13% (human) to +15% (stretch).
-    v.choice("Forcing term", forcing, std::string("Type 2"),
-             Choices<std::string>{{"constant", "Constant"}, {"type 1", "Type 1"}, {"type 2", "Type 2"}},
+    v.choice("Forcing term", forcing, Forcing::Type2,
+             Choices<Forcing>{{"constant", Forcing::Constant}, {"type 1", Forcing::Type1}, {"type 2", Forcing::Type2}},
              "CG tolerance per Newton step: constant ('Linear tolerance'), or Eisenstat-Walker type 1 or 2 (0.01 "
              "while the residual falls slowly, down to 'Linear tolerance' as Newton converges; an exact-Hessian step "
              "that would stop CG within a digit above the convergence threshold solves to half the threshold)");
-    v.choice("Preconditioner", preconditioner, std::string("MueLu"),
-             Choices<std::string>{{"muelu", "MueLu"}, {"none", "None"}}, "CG preconditioner");
-    v.choice("Near-null space", near_null_space, std::string("reference"),
-             Choices<std::string>{{"reference", "reference"}, {"current", "current"}},
+    v.choice("Preconditioner", preconditioner, Preconditioner::MueLu,
+             Choices<Preconditioner>{{"muelu", Preconditioner::MueLu}, {"none", Preconditioner::None}}, "CG preconditioner");
+    v.choice("Near-null space", near_null_space, NearNullSpace::Reference,
+             Choices<NearNullSpace>{{"reference", NearNullSpace::Reference}, {"current", NearNullSpace::Current}},
              "MueLu's rigid-body modes and coordinates: of the reference configuration, or of the last "
              "converged state (used at each MueLu setup from scratch, see 'Preconditioner rebuild')");
-    v.choice("Preconditioner rebuild", rebuild, std::string("when needed"),
-             Choices<std::string>{{"when needed", "when needed"}, {"every step", "every step"}},
+    v.choice("Preconditioner rebuild", rebuild, Rebuild::WhenNeeded,
+             Choices<Rebuild>{{"when needed", Rebuild::WhenNeeded}, {"every step", Rebuild::EveryStep}},
              "when MueLu's hierarchy is set up from scratch: at every load step, or only when a step's CG "
              "iterations per Newton iteration grow past 'Rebuild factor' times those of the first step after "
              "the last setup (and after a failed step); in between, each Newton iteration reuses the "
@@ -96,8 +109,8 @@ struct SolverParameters {
     v.entry("Rebuild factor", rebuild_factor, 1.5, "see 'Preconditioner rebuild'", Range::closed(1.0, 1e6));
     // Default 'when needed', measured against 'every Newton iteration' (nonlinear_solver.cpp,
     // PreconditionerLag; docs/performance.md).
-    v.choice("Preconditioner update", update, std::string("when needed"),
-             Choices<std::string>{{"when needed", "when needed"}, {"every Newton iteration", "every Newton iteration"}},
+    v.choice("Preconditioner update", update, Update::WhenNeeded,
+             Choices<Update>{{"when needed", Update::WhenNeeded}, {"every Newton iteration", Update::EveryNewtonIteration}},
              "between setups from scratch: update the preconditioner for every Newton iteration's Jacobian "
              "(MueLu's Galerkin products and smoothers on the kept prolongators), or keep it, across Newton "
              "iterations and load steps, until a linear solve needs more than 'Update factor' times the CG "
@@ -114,8 +127,8 @@ struct SolverParameters {
     // point: scramble 444 -> 391 Newton iterations (both back to rest); the 48k-cell human's crouch,
     // steps 5 and 6 (85-143 points inverted at a crease): 43 -> 33 and over 80 -> 16; twist, drop,
     // arm, voxel arm, arm with contact, squash and stretch unchanged (nothing inverts there).
-    v.choice("Inverted points", inverted, std::string("exact"),
-             Choices<std::string>{{"exact", "exact"}, {"per point", "per point"}, {"whole mesh", "whole mesh"}},
+    v.choice("Inverted points", inverted, Inverted::Exact,
+             Choices<Inverted>{{"exact", Inverted::Exact}, {"per point", Inverted::PerPoint}, {"whole mesh", Inverted::WholeMesh}},
              "when the exact Hessian is due ('Exact Hessian below') and at most 1% of the points are inverted: "
              "exact at the inverted points too (a direction that does not descend falls back to projection), "
              "per point (exact where J > 0, the law's projection where J <= 0: Newton then converges linearly, "
@@ -126,6 +139,19 @@ struct SolverParameters {
     v.raw("Stratimikos", stratimikos, "raw Stratimikos (Belos, MueLu) parameters laid over Sinew's defaults");
   }
 };
+
+// The names NOX and Stratimikos give the choices above.
+inline const char* nox_name(SolverParameters::LineSearch l) {
+  using L = SolverParameters::LineSearch;
+  return l == L::Backtrack ? "Backtrack" : l == L::Polynomial ? "Polynomial" : l == L::MoreThuente ? "More'-Thuente" : "Full Step";
+}
+inline const char* nox_name(SolverParameters::Forcing f) {
+  using F = SolverParameters::Forcing;
+  return f == F::Constant ? "Constant" : f == F::Type1 ? "Type 1" : "Type 2";
+}
+inline const char* stratimikos_name(SolverParameters::Preconditioner p) {
+  return p == SolverParameters::Preconditioner::MueLu ? "MueLu" : "None";
+}
 
 class NonlinearSolver {
  public:
