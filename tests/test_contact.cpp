@@ -8,6 +8,7 @@
 
 #include <sinew/algebra/terms/contact.hpp>
 #include <sinew/core/parameters.hpp>
+#include <sinew/solver/nonlinear_solver.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/scenes/scene.hpp>
 
@@ -16,6 +17,7 @@
 #include <Tpetra_Vector.hpp>
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
@@ -100,7 +102,7 @@ TEST(Contact, SpringsHaveTheGradientAndHessianOfTheirEnergy) {
   auto f = sys.create_vector();
   auto K = sys.create_matrix();
   const auto t = sys.evaluate(*u, f.get(), K.get(), Backend::Default, Projection::None);
-  EXPECT_GT(t.contact, 0.0);
+  EXPECT_GT(t.share("contact"), 0.0);
   EXPECT_GT(t.contacts, 10);
   EXPECT_GT(t.penetration, 0.0);
   auto dir = sys.create_vector(), up = sys.create_vector(), um = sys.create_vector(), fp = sys.create_vector(),
@@ -293,7 +295,8 @@ TEST(Contact, AHalfSpaceAndAMeshColliderPushBackAlike) {
 
 namespace {
 
-std::string blocks_xml(double push, bool self, int steps = 4) {
+std::string blocks_xml(double push, bool self, int steps = 4, const std::string& contact_extra = "",
+                       const std::string& output_extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x") {
   return R"x(<ParameterList name="Sinew">
   <Parameter name="Scene" type="string" value="blocks"/>
   <ParameterList name="Mesh">
@@ -320,6 +323,7 @@ std::string blocks_xml(double push, bool self, int steps = 4) {
   </ParameterList>
   <ParameterList name="Contact">
     <Parameter name="Self contact" type="bool" value=")x" + (self ? "true" : "false") + R"x("/>
+    )x" + contact_extra + R"x(
   </ParameterList>
   <ParameterList name="Solver">
     <Parameter name="Absolute tolerance" type="double" value="1.0e-9"/>
@@ -327,9 +331,16 @@ std::string blocks_xml(double push, bool self, int steps = 4) {
   <ParameterList name="Output">
     <Parameter name="HDF5" type="bool" value="false"/>
     <Parameter name="Surface OBJ" type="bool" value="false"/>
-    <Parameter name="Checkpoint every" type="int" value="0"/>
+    )x" + output_extra + R"x(
   </ParameterList>
 </ParameterList>)x";
+}
+
+// The tractions of this rank's springs, in their order.
+std::vector<double> tractions(const ContactTerm& contact) {
+  std::vector<double> out;
+  for (const auto& p : contact.pairs()) out.push_back(p.lambda);
+  return out;
 }
 
 }  // namespace
@@ -396,4 +407,42 @@ TEST(Contact, WithoutContactTheBlocksPassThroughEachOther) {
   Teuchos::reduceAll(*world(), Teuchos::REDUCE_MIN, low, Teuchos::outArg(glow));
   Teuchos::reduceAll(*world(), Teuchos::REDUCE_MAX, high, Teuchos::outArg(ghigh));
   EXPECT_LT(glow, ghigh - 0.2);
+}
+
+// A run stopped by a signal inside a contact step (between its augmented-Lagrangian rounds) and restarted
+// from its checkpoint continues with the springs and tractions the uninterrupted run had at the step's
+// start (the contact term's state in the checkpoint), and ends where it ends. A soft penalty (3000,
+// a fiftieth of the automatic one) makes the rounds raise tractions; the preconditioner is set up
+// afresh each step as the restarted run does.
+TEST(Contact, ARestartInsideAContactStepContinuesWithTheSameTractions) {
+  const std::string xml = blocks_xml(0.4, true, 4, R"x(<Parameter name="Stiffness" type="double" value="3000"/>)x",
+                                     R"x(<Parameter name="Checkpoint every" type="int" value="1"/>)x");
+  const std::string dir = "test_results/contact_restart" + tag();
+  SceneConfig c = config(xml, dir + "_full");
+  c.params.solver.rebuild = SolverParameters::Rebuild::EveryStep;
+  Simulation full(c, RunOptions{true, ""});
+  std::vector<double> at_step_2;
+  full.set_step_observer([&](const StepRecord& r, const Vector&) {
+    if (r.step == 2) at_step_2 = tractions(*full.scene().contact());
+  });
+  ASSERT_EQ(full.run(), 0);
+  double largest = 0.0;
+  for (double l : at_step_2) largest = std::max(largest, l);
+  double largest_all = 0.0;
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_MAX, largest, Teuchos::outArg(largest_all));
+  EXPECT_GT(largest_all, 0.0) << "the scene must carry tractions into step 3 for this test to mean anything";
+
+  c.params.output.directory = dir + "_cut";
+  Simulation cut(c, RunOptions{true, ""});
+  int calls = 0;  // Newton iterations of step 3: stop in its later rounds
+  cut.set_stop_check([&] { return cut.records().size() == 2 && ++calls > 12 ? SIGTERM : 0; });
+  ASSERT_NE(cut.run(), 0);
+  ASSERT_EQ(cut.records().size(), 2u);
+
+  Simulation again(c, RunOptions{true, dir + "_cut/checkpoint.h5"});
+  EXPECT_EQ(tractions(*again.scene().contact()), at_step_2);
+  ASSERT_EQ(again.run(), 0);
+  const double d = rel_diff(gather(full.displacement()), gather(again.displacement()));
+  EXPECT_LT(d, 1e-8);
+  if (world()->getRank() == 0) std::printf("restarted inside step 3: final displacement %.2e (relative) from the uninterrupted run's\n", d);
 }

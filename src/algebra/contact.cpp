@@ -319,93 +319,133 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
       }
     }
   }
-  out.totals.contact += energy;
-  out.totals.energy += energy;
+  out.energy += energy;
   out.totals.contacts += pressing;
   out.totals.penetration = std::max(out.totals.penetration, penetration);
 }
 
+// ---- detection, in named steps ------------------------------------------------------------------------
+
+// The current positions a detection reads: of the local nodes (owned and ghost), and of every surface
+// vertex (replicated).
+struct ContactTerm::Positions {
+  Kokkos::View<double* [3]>::HostMirror X;
+  Vector overlap;
+  decltype(std::declval<Vector&>().getLocalViewHost(Tpetra::Access::ReadOnly)) uh;
+  std::vector<Vec> surface;
+  Positions(const System& system, const Vector& u)
+      : X(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), system.mesh().X)), overlap(system.overlap_dofs()) {
+    overlap.doImport(u, Import(system.owned_dofs(), system.overlap_dofs()), Tpetra::INSERT);
+    uh = overlap.getLocalViewHost(Tpetra::Access::ReadOnly);
+  }
+  Vec node(int n) const { return Vec{X(n, 0) + uh(3 * n, 0), X(n, 1) + uh(3 * n + 1, 0), X(n, 2) + uh(3 * n + 2, 0)}; }
+};
+
+// A pair a detection considers before choosing.
+struct ContactTerm::Candidate {
+  int vertex, kind;  // kind 0: inside (reference map), 1: kept from the last pass, 2: proximity
+  int triangle;
+  double beta[3], normal[3], d2;
+  int refined;
+  double lambda;
+};
+
 ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   const auto t0 = std::chrono::steady_clock::now();
   ContactDetection stats;
-  const Mesh& mesh = system_.mesh();
   const MPI_Comm comm = raw_comm(*system_.comm());
-  const double k = settings_.stiffness, delta = settings_.thickness;
-  // Current positions of the local nodes (owned and ghost).
-  Vector overlap(system_.overlap_dofs());
-  overlap.doImport(u, Import(system_.owned_dofs(), system_.overlap_dofs()), Tpetra::INSERT);
-  auto uh = overlap.getLocalViewHost(Tpetra::Access::ReadOnly);
-  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
-  auto position = [&](int n) { return Vec{Xh(n, 0) + uh(3 * n, 0), Xh(n, 1) + uh(3 * n + 1, 0), Xh(n, 2) + uh(3 * n + 2, 0)}; };
-
-  // Colliders: a sample still behind a collider by more than a tenth of the thickness gets its traction
-  // raised (Uzawa, between the solves of a step), one off contact loses it (at every detection).
-  long long raised = 0;
-  if (!colliders_.empty()) {
-    for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
-      const Vec x = position(owned_samples_[i]);
-      for (std::size_t c = 0; c < colliders_.size(); ++c) {
-        const Vec xl = poses_[c].inverse().apply(x);
-        double& lambda = collider_lambda_[i * colliders_.size() + c];
-        if (!colliders_[c].bounds(delta + lambda / k).contains(xl)) {
-          lambda = 0.0;
-          continue;
-        }
-        Vec gl;
-        const double phi = colliders_[c].distance(xl, gl);
-        if (keep && phi < -0.1 * delta) {
-          lambda = std::max(0.0, lambda + k * (delta - phi));
-          ++raised;
-        } else if (lambda / k + delta - phi <= 0.0) {
-          lambda = 0.0;  // off contact: its traction goes (the state feels no difference; the energy a constant)
-        }
-      }
-    }
-  }
+  Positions at(system_, u);
+  long long raised = update_collider_tractions(at, keep);
   MPI_Allreduce(&raised, &stats.raised, 1, MPI_LONG_LONG, MPI_SUM, comm);
 
   pairs_.clear();
   global_pairs_ = 0;
   const std::vector<Chosen> last = std::move(chosen_);
   chosen_.clear();
-  const std::vector<Chosen> previous = keep ? last : std::vector<Chosen>();
   if (!settings_.self) {
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return stats;
   }
+  gather_surface(at);
+  // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
+  // inside test cannot tell it more).
+  std::vector<char> paired(surface_.vertices(), 0);
+  std::vector<Candidate> kept = keep ? kept_candidates(at, last, paired, stats) : std::vector<Candidate>();
+  // A sample paired again after a fresh start carries its traction.
+  std::vector<double> carried(surface_.vertices(), 0.0);
+  if (!keep)  // (a pair that no longer pushes has dropped its traction already)
+    for (const Chosen& c : last) carried[c.vertex] = c.lambda;
+  std::vector<Candidate> found = inside_candidates(at, paired, carried, stats);
+  proximity_candidates(at, paired, carried, found);
+  // Every rank sees every candidate and chooses the same.
+  std::vector<Candidate> all = allgatherv(comm, found);
+  all.insert(all.end(), kept.begin(), kept.end());
+  const long long pressing_new = choose(std::move(all), stats);
+  install();
+  long long unpaired = stats.unpaired;
+  MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  double deepest = stats.deepest;
+  MPI_Allreduce(&deepest, &stats.deepest, 1, MPI_DOUBLE, MPI_MAX, comm);
+  // What changes the energy at this state: a converged state stays converged under new pairs that do
+  // not push yet (they wait in the pair set for the next solve).
+  stats.added = pressing_new + stats.refrozen;
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+long long ContactTerm::update_collider_tractions(const Positions& at, bool keep) {
+  // Colliders: a sample still behind a collider by more than a tenth of the thickness gets its traction
+  // raised (Uzawa, between the solves of a step), one off contact loses it (at every detection).
+  const double k = settings_.stiffness, delta = settings_.thickness;
+  long long raised = 0;
+  for (std::size_t i = 0; i < owned_samples_.size() && !colliders_.empty(); ++i) {
+    const Vec x = at.node(owned_samples_[i]);
+    for (std::size_t c = 0; c < colliders_.size(); ++c) {
+      const Vec xl = poses_[c].inverse().apply(x);
+      double& lambda = collider_lambda_[i * colliders_.size() + c];
+      if (!colliders_[c].bounds(delta + lambda / k).contains(xl)) {
+        lambda = 0.0;
+        continue;
+      }
+      Vec gl;
+      const double phi = colliders_[c].distance(xl, gl);
+      if (keep && phi < -0.1 * delta) {
+        lambda = std::max(0.0, lambda + k * (delta - phi));
+        ++raised;
+      } else if (lambda / k + delta - phi <= 0.0) {
+        lambda = 0.0;  // off contact: its traction goes (the state feels no difference; the energy a constant)
+      }
+    }
+  }
+  return raised;
+}
+
+void ContactTerm::gather_surface(Positions& at) const {
   struct Position {
     int vertex;
     double x[3];
   };
   std::vector<Position> mine;
   for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
-    const Vec p = position(owned_samples_[i]);
+    const Vec p = at.node(owned_samples_[i]);
     mine.push_back({sample_vertex_[i], {p[0], p[1], p[2]}});
   }
-  std::vector<Vec> x(surface_.vertices());
-  for (const Position& p : allgatherv(comm, mine)) x[p.vertex] = {p.x[0], p.x[1], p.x[2]};
+  at.surface.assign(surface_.vertices(), Vec{});
+  for (const Position& p : allgatherv(raw_comm(*system_.comm()), mine)) at.surface[p.vertex] = {p.x[0], p.x[1], p.x[2]};
+}
 
+bool ContactTerm::excluded(int t, int v) const {
+  for (int m : surface_.triangles[t])
+    if (surface_.in_ring(v, surface_.gid[m])) return true;
+  return false;
+}
+
+std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions& at, const std::vector<Chosen>& previous,
+                                                                 std::vector<char>& paired, ContactDetection& stats) const {
+  // Every rank decides the same from the replicated positions.
   const auto& T = surface_.triangles;
-  auto excluded = [&](int t, int v) {
-    for (int m : T[t])
-      if (surface_.in_ring(v, surface_.gid[m])) return true;
-    return false;
-  };
-  auto closest_deformed = [&](int t, const Vec& p, double w[3]) { return closest_on_triangle(p, x[T[t][0]], x[T[t][1]], x[T[t][2]], w); };
-
-  struct Candidate {
-    int vertex, kind;  // kind 0: inside (reference map), 1: kept from the last pass, 2: proximity
-    int triangle;
-    double beta[3], normal[3], d2;
-    int refined;
-    double lambda;
-  };
-  std::vector<Candidate> found;
-
-  // Kept pairs (every rank decides the same from the replicated positions).
-  // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
-  // inside test cannot tell it more).
-  std::vector<char> paired(surface_.vertices(), 0);
+  const auto& x = at.surface;
+  const double k = settings_.stiffness, delta = settings_.thickness;
   std::vector<Candidate> kept;
   for (const Chosen& c : previous) {
     const Vec q = c.beta[0] * x[T[c.triangle][0]] + c.beta[1] * x[T[c.triangle][1]] + c.beta[2] * x[T[c.triangle][2]];
@@ -422,19 +462,25 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     }
     kept.push_back({c.vertex, 1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0, lambda});
   }
-  // A sample paired again after a fresh start carries its traction.
-  std::vector<double> carried(surface_.vertices(), 0.0);
-  if (!keep)  // (a pair that no longer pushes has dropped its traction already)
-    for (const Chosen& c : last) carried[c.vertex] = c.lambda;
+  return kept;
+}
 
+std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positions& at, const std::vector<char>& paired,
+                                                                   const std::vector<double>& carried,
+                                                                   ContactDetection& stats) const {
   // Samples inside the deformed elements this rank owns.
+  const Mesh& mesh = system_.mesh();
+  const auto& T = surface_.triangles;
+  const auto& x = at.surface;
+  auto closest_deformed = [&](int t, const Vec& p, double w[3]) { return closest_on_triangle(p, x[T[t][0]], x[T[t][1]], x[T[t][2]], w); };
   auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
   const bool hex = mesh.type == ElementType::Hex8;
   const int npe = nodes_per_element(mesh.type);
   std::vector<Box> eboxes(mesh.n_owned_elements);
   for (std::size_t e = 0; e < mesh.n_owned_elements; ++e)
-    for (int a = 0; a < npe; ++a) eboxes[e].add(position(conn(e, a)));
+    for (int a = 0; a < npe; ++a) eboxes[e].add(at.node(conn(e, a)));
   const AabbTree element_tree(eboxes);
+  std::vector<Candidate> found;
   // Every sample, kept pairs included: a kept spring whose target has slid away while its sample went
   // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
@@ -450,11 +496,11 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
         int nodes[4];
         for (int a = 0; a < 4; ++a) nodes[a] = conn(e, hex ? kHexTets[k][a] : a);
         double l[4];
-        if (!tet_barycentric(x[v], position(nodes[0]), position(nodes[1]), position(nodes[2]), position(nodes[3]), l)) continue;
+        if (!tet_barycentric(x[v], at.node(nodes[0]), at.node(nodes[1]), at.node(nodes[2]), at.node(nodes[3]), l)) continue;
         if (l[0] < -1e-12 || l[1] < -1e-12 || l[2] < -1e-12 || l[3] < -1e-12) continue;
         inside = true;
         Xref = {0.0, 0.0, 0.0};
-        for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{Xh(nodes[a], 0), Xh(nodes[a], 1), Xh(nodes[a], 2)};
+        for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{at.X(nodes[a], 0), at.X(nodes[a], 1), at.X(nodes[a], 2)};
       }
     });
     if (!inside) continue;
@@ -502,8 +548,14 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined, carried[v]});
     stats.deepest = std::max(stats.deepest, std::sqrt(d2));
   }
+  return found;
+}
 
+void ContactTerm::proximity_candidates(const Positions& at, const std::vector<char>& paired, const std::vector<double>& carried,
+                                       std::vector<Candidate>& found) const {
   // This rank's samples near the deformed surface, outside it.
+  const auto& T = surface_.triangles;
+  const auto& x = at.surface;
   std::vector<Box> tboxes(T.size());
   for (std::size_t t = 0; t < T.size(); ++t)
     for (int m : T[t]) tboxes[t].add(x[m]);
@@ -516,7 +568,7 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     triangle_tree.near(x[v], margin, [&](int t) {
       if (excluded(t, v)) return;
       double w[3];
-      const Vec q = closest_deformed(t, x[v], w);
+      const Vec q = closest_on_triangle(x[v], x[T[t][0]], x[T[t][1]], x[T[t][2]], w);
       const double dd = distance2(x[v], q);
       if (dd >= best2) return;
       if (dot(x[v] - q, triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]])) < 0.0) return;  // behind: inside
@@ -531,13 +583,14 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     const Vec n = norm(x[v] - q) > 1e-12 * margin ? normalized(x[v] - q) : triangle_normal(x[T[best][0]], x[T[best][1]], x[T[best][2]]);
     found.push_back({v, 2, best, {bw[0], bw[1], bw[2]}, {n[0], n[1], n[2]}, best2, 0, carried[v]});
   }
+}
 
-  // Every rank sees every candidate and chooses the same. A sample keeps all its kept pairs; an inside
-  // pair whose target triangle none of them has joins them (up to four: a sample in a crease is pushed
-  // by both sides, where one frozen plane would let it slip in past its target's edge); a sample with
-  // no kept pair takes its inside pair, or else its nearest proximity one.
-  std::vector<Candidate> all = allgatherv(comm, found);
-  all.insert(all.end(), kept.begin(), kept.end());
+long long ContactTerm::choose(std::vector<Candidate> all, ContactDetection& stats) {
+  // A sample keeps all its kept pairs; an inside pair whose target triangle none of them has joins them
+  // (up to four: a sample in a crease is pushed by both sides, where one frozen plane would let it slip
+  // in past its target's edge); a sample with no kept pair takes its inside pair, or else its nearest
+  // proximity one.
+  const double delta = settings_.thickness;
   std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
     if (a.vertex != b.vertex) return a.vertex < b.vertex;
     if (a.kind != b.kind) return a.kind < b.kind;
@@ -570,8 +623,8 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     i = j;
   }
   long long pressing_new = 0;  // new pairs that push at once: inside ones, and near ones within the thickness
+  chosen_.clear();
   for (const Candidate& c : picked) {
-    ++global_pairs_;
     if (c.kind == 1)
       ++stats.kept;
     else
@@ -579,6 +632,16 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     if (c.kind == 0 || (c.kind == 2 && c.d2 < delta * delta)) ++pressing_new;
     stats.refined += c.refined;
     chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, c.lambda});
+  }
+  return pressing_new;
+}
+
+void ContactTerm::install() {
+  // The springs of the chosen pairs that touch a node of this rank (the same list on every rank).
+  const auto& T = surface_.triangles;
+  pairs_.clear();
+  global_pairs_ = static_cast<long long>(chosen_.size());
+  for (const Chosen& c : chosen_) {
     Pair p;
     const int verts[4] = {c.vertex, T[c.triangle][0], T[c.triangle][1], T[c.triangle][2]};
     bool here = false;
@@ -596,16 +659,116 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     p.owner = surface_.owner[c.vertex];
     pairs_.push_back(p);
   }
-  long long unpaired = stats.unpaired;
-  MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  double deepest = stats.deepest;
-  MPI_Allreduce(&deepest, &stats.deepest, 1, MPI_DOUBLE, MPI_MAX, comm);
-  // What changes the energy at this state: a converged state stays converged under new pairs that do
-  // not push yet (they wait in the pair set for the next solve).
-  stats.added = pressing_new + stats.refrozen;
   columns_changed(*system_.column_dofs());
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return stats;
+}
+
+// ---- lifecycle -------------------------------------------------------------------------------------------
+
+void ContactTerm::set_load(double t) {
+  if (pose_of_)
+    for (std::size_t k = 0; k < colliders_.size(); ++k) poses_[k] = pose_of_(k, t);
+}
+
+void ContactTerm::begin_step(const StepStart& s) {
+  if (s.first_attempt) step_ = StepCounts{};
+}
+
+RoundResult ContactTerm::round(const Vector& u, int round) {
+  // The first round pairs afresh at the step's first guess; later ones keep those pairs and add the
+  // samples the last solve pushed into contact. The step ends when a detection adds none, or after
+  // the maximum of solves; either way the end state has been looked at.
+  const ContactDetection d = detect(u, round > 0);
+  step_.rounds += 1;
+  step_.seconds += d.seconds;
+  step_.pairs = global_pairs_;
+  step_.inside_depth = d.deepest;
+  RoundResult r;
+  r.again = !((round > 0 && d.added + d.raised == 0) || round == settings_.rounds);
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "contact round %d: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld targets refined%s), "
+                "%lld tractions raised, %.2f s",
+                round + 1, global_pairs_, d.kept, d.inside, d.proximity, d.refined,
+                d.unpaired ? (", " + std::to_string(d.unpaired) + " unpaired").c_str() : "", d.raised, d.seconds);
+  r.line = buf;
+  return r;
+}
+
+void ContactTerm::end_step(const Vector&) { commit(); }
+
+// A failed solve: the next attempt starts from the pairs and tractions this one found (as the rounds
+// of a cut step always did), so a restart inside the cut step starts where the run would.
+void ContactTerm::abandon_step() { commit(); }
+
+void ContactTerm::commit() {
+  committed_chosen_ = chosen_;
+  committed_collider_lambda_ = collider_lambda_;
+}
+
+void ContactTerm::save_state(TermState& state) const {
+  // The pairs (the same on every rank): sample vertex, target triangle, beta, normal, lambda.
+  std::vector<double> pairs;
+  pairs.reserve(9 * committed_chosen_.size());
+  for (const Chosen& c : committed_chosen_) {
+    pairs.insert(pairs.end(), {static_cast<double>(c.vertex), static_cast<double>(c.triangle), c.beta[0], c.beta[1], c.beta[2],
+                               c.normal[0], c.normal[1], c.normal[2], c.lambda});
+  }
+  state.shared.emplace_back("pairs", std::move(pairs));
+  if (!colliders_.empty()) {
+    // Per owned node, its traction on each collider (0 off the surface).
+    TermState::Nodal n{"collider tractions", static_cast<int>(colliders_.size()), {}};
+    n.values.assign(system_.mesh().n_owned_nodes * colliders_.size(), 0.0);
+    for (std::size_t i = 0; i < owned_samples_.size(); ++i)
+      for (std::size_t c = 0; c < colliders_.size(); ++c)
+        n.values[owned_samples_[i] * colliders_.size() + c] = committed_collider_lambda_[i * colliders_.size() + c];
+    state.nodal.push_back(std::move(n));
+  }
+}
+
+void ContactTerm::load_state(const TermState& state) {
+  const std::vector<double>* pairs = state.find_shared("pairs");
+  if (!pairs || pairs->size() % 9 != 0) throw InputError("contact: the checkpoint's pairs are missing or malformed");
+  chosen_.clear();
+  const auto V = static_cast<double>(surface_.vertices()), T = static_cast<double>(surface_.triangles.size());
+  for (std::size_t k = 0; k < pairs->size(); k += 9) {
+    const double* r = pairs->data() + k;
+    if (!(r[0] >= 0 && r[0] < V && r[1] >= 0 && r[1] < T && r[8] >= 0.0))
+      throw InputError("contact: the checkpoint's pair " + std::to_string(k / 9) + " names no surface vertex or triangle of this mesh");
+    chosen_.push_back({static_cast<int>(r[0]), static_cast<int>(r[1]), {r[2], r[3], r[4]}, {r[5], r[6], r[7]}, r[8]});
+  }
+  if (!colliders_.empty()) {
+    const TermState::Nodal* n = state.find_nodal("collider tractions");
+    if (!n || n->components != static_cast<int>(colliders_.size()))
+      throw InputError("contact: the checkpoint's collider tractions are missing or for another number of colliders");
+    for (std::size_t i = 0; i < owned_samples_.size(); ++i)
+      for (std::size_t c = 0; c < colliders_.size(); ++c)
+        collider_lambda_[i * colliders_.size() + c] = n->values[owned_samples_[i] * colliders_.size() + c];
+  }
+  install();
+  commit();
+}
+
+std::vector<std::string> ContactTerm::log_columns() const {
+  return {"contacts", "penetration", "contact_pairs", "contact_rounds", "seconds_contact", "inside_depth"};
+}
+
+std::vector<double> ContactTerm::log_values(const EvaluationTotals& totals) const {
+  return {static_cast<double>(totals.contacts), totals.penetration, static_cast<double>(step_.pairs),
+          static_cast<double>(step_.rounds), step_.seconds, step_.inside_depth};
+}
+
+std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) const {
+  if (totals.contacts == 0 && step_.pairs == 0) return {};
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g",
+                totals.contacts, totals.penetration, step_.inside_depth, totals.share(name()));
+  return {buf};
+}
+
+std::vector<std::pair<std::string, int>> ContactTerm::node_field_names() const { return {{"contact_pressure", 1}}; }
+
+void ContactTerm::node_fields(std::vector<TermState::Nodal>& fields) const {
+  fields.push_back({"contact_pressure", 1, pressure_});
 }
 
 }  // namespace sinew

@@ -123,8 +123,7 @@ void ElasticTerm::add(const TermInput& in, TermOutput& out) const {
               : detail::assemble_tet4<Kokkos::DefaultExecutionSpace>(b.law, p, b.elements, chunks, r));
   }
   EvaluationTotals& o = out.totals;
-  o.elastic += t.energy;
-  o.energy += t.energy;
+  out.energy += t.energy;
   o.volume += t.volume;
   o.min_J = std::min(o.min_J, t.min_J);
   o.inverted += t.inverted;

@@ -40,8 +40,21 @@ void ExternalForceTerm::add(const TermInput& in, TermOutput& out) const {
         }
       },
       energy);
-  out.totals.external += energy;
-  out.totals.energy += energy;
+  out.energy += energy;
+}
+
+void ExternalForceTerm::set_full(const std::array<double, 3>& b, const std::array<double, 3>& g, bool ramped) {
+  full_body_ = b;
+  full_gravity_ = g;
+  ramped_ = ramped;
+}
+
+void ExternalForceTerm::set_load(double t) {
+  const double ramp = ramped_ ? t : 1.0;
+  for (int c = 0; c < 3; ++c) {
+    body_[c] = ramp * full_body_[c];
+    gravity_[c] = ramp * full_gravity_[c];
+  }
 }
 
 }  // namespace sinew

@@ -116,8 +116,7 @@ void InertiaTerm::add(const TermInput& in, TermOutput& out) const {
     }
     if (K_start_) add_scaled(*K_start_, beta_ / c_damping_, owned, out.matrix);
   }
-  out.totals.inertia += energy;
-  out.totals.energy += energy;
+  out.energy += energy;
 }
 
 }  // namespace sinew

@@ -191,8 +191,102 @@ void System::build_graph() {
 }
 
 void System::add_term(std::shared_ptr<EnergyTerm> term) {
+  for (const auto& t : terms_)
+    if (std::string(t->name()) == term->name())
+      throw std::logic_error(std::string("System::add_term: a second term named '") + term->name() + "'");
   term->columns_changed(*column_dofs_);
   terms_.push_back(std::move(term));
+}
+
+void System::set_load(double t) {
+  for (const auto& term : terms_) term->set_load(t);
+}
+
+void System::begin_step(const StepStart& s) {
+  for (const auto& term : terms_) term->begin_step(s);
+}
+
+System::Round System::round(const Vector& u, int round) {
+  Round r;
+  for (const auto& term : terms_) {
+    RoundResult t = term->round(u, round);
+    r.again = r.again || t.again;
+    if (!t.line.empty()) r.lines.push_back(std::move(t.line));
+  }
+  r.pattern_changed = update_pattern();
+  return r;
+}
+
+void System::end_step(const Vector& u) {
+  for (const auto& term : terms_) term->end_step(u);
+}
+
+void System::abandon_step() {
+  for (const auto& term : terms_) term->abandon_step();
+}
+
+std::vector<std::pair<std::string, TermState>> System::save_states() const {
+  std::vector<std::pair<std::string, TermState>> out;
+  for (const auto& term : terms_) {
+    TermState s;
+    term->save_state(s);
+    if (!s.shared.empty() || !s.nodal.empty()) out.emplace_back(term->name(), std::move(s));
+  }
+  return out;
+}
+
+void System::load_states(const std::vector<std::pair<std::string, TermState>>& states) {
+  for (const auto& term : terms_)
+    for (const auto& [name, state] : states)
+      if (name == term->name()) term->load_state(state);
+  update_pattern();  // the couplings the restored state needs (contact springs)
+}
+
+bool System::linearisable() const {
+  return std::all_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->linearisable(); });
+}
+
+std::vector<std::string> System::log_columns() const {
+  std::vector<std::string> c;
+  for (const auto& term : terms_) {
+    c.push_back(std::string(term->name()) + "_energy");
+    for (auto& own : term->log_columns()) c.push_back(std::move(own));
+  }
+  return c;
+}
+
+std::vector<double> System::log_values(const EvaluationTotals& totals) const {
+  std::vector<double> v;
+  for (const auto& term : terms_) {
+    v.push_back(totals.share(term->name()));
+    const std::vector<double> own = term->log_values(totals);
+    if (own.size() != term->log_columns().size())
+      throw std::logic_error(std::string("System::log_values: term '") + term->name() + "' gave values not matching its columns");
+    v.insert(v.end(), own.begin(), own.end());
+  }
+  return v;
+}
+
+std::vector<std::string> System::summary(const EvaluationTotals& totals) const {
+  std::vector<std::string> lines;
+  for (const auto& term : terms_)
+    for (auto& line : term->summary(totals)) lines.push_back(std::move(line));
+  return lines;
+}
+
+std::vector<std::pair<std::string, int>> System::node_field_names() const {
+  std::vector<std::pair<std::string, int>> names;
+  for (const auto& term : terms_)
+    for (auto& n : term->node_field_names()) names.push_back(std::move(n));
+  return names;
+}
+
+std::vector<TermState::Nodal> System::node_fields(const Vector& u) const {
+  std::vector<TermState::Nodal> fields;
+  if (node_field_names().empty()) return fields;
+  evaluate(u, nullptr, nullptr);  // the fields of this state (a contact pressure)
+  for (const auto& term : terms_) term->node_fields(fields);
+  return fields;
 }
 
 bool System::update_pattern() {
@@ -316,6 +410,9 @@ std::size_t System::global_fixed_dofs() const {
 
 void System::set_body_force(const std::array<double, 3>& f) { external_->set_body_force(f); }
 void System::set_gravity(const std::array<double, 3>& g) { external_->set_gravity(g); }
+void System::set_external_loads(const std::array<double, 3>& f, const std::array<double, 3>& g, bool ramped) {
+  external_->set_full(f, g, ramped);
+}
 
 EvaluationTotals System::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend,
                                   std::optional<Projection> projection) const {
@@ -347,8 +444,9 @@ NodeRelaxationTotals System::relax_nodes(Vector& u, const Vector& force, double 
                                          const NodeRelaxationSettings& settings) const {
   NodeRelaxationTotals done;
   // Contact and inertia are not linear in a node's displacement: their share of the gradient cannot be
-  // frozen. The external-force term's can (it is linear).
-  if (terms_.size() != 2 || !(share > 0.0) || !Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible)
+  // frozen. The external-force term's can (it is linear). Each term says which it is.
+  const bool allowed = std::all_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->allows_node_relaxation(); });
+  if (!allowed || !(share > 0.0) || !Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible)
     return done;
   const double f2 = force.norm2() * force.norm2();
   if (!(f2 > 0.0) || !std::isfinite(f2)) return done;
@@ -426,6 +524,7 @@ EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backe
   }
   TermOutput out;
   out.totals.min_J = HUGE_VAL;
+  std::vector<std::pair<const char*, double>> shares;
   {
     TermInput in;
     auto u_view = u_columns_->getLocalViewDevice(Tpetra::Access::ReadOnly);
@@ -442,8 +541,13 @@ EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backe
     if (K) out.matrix = K->getLocalMatrixDevice();
     out.owned_dofs = static_cast<int>(3 * mesh_.n_owned_nodes);
     out.fields = fields;
-    for (const auto& term : terms_)
-      if (!only || term.get() == only) term->add(in, out);
+    shares.reserve(terms_.size());
+    for (const auto& term : terms_) {
+      if (only && term.get() != only) continue;
+      out.energy = 0.0;
+      term->add(in, out);
+      shares.emplace_back(term->name(), out.energy);
+    }
     Kokkos::fence();
   }
   if (eliminate) eliminate_dirichlet(force, K);
@@ -451,15 +555,17 @@ EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backe
 
   const EvaluationTotals& t = out.totals;
   EvaluationTotals g;
-  const double sums[7] = {t.energy, t.elastic, t.external, t.inertia, t.contact, t.volume, 0.0};
-  double gsums[7];
-  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, 7, sums, gsums);
+  // One sum over ranks for the volume and each term's share (every rank has the same terms).
+  // The total summed locally first, as the terms add up, then over ranks.
+  double local_energy = 0.0;
+  for (const auto& share : shares) local_energy += share.second;
+  std::vector<double> sums{local_energy, t.volume}, gsums(shares.size() + 2);
+  for (const auto& share : shares) sums.push_back(share.second);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, static_cast<int>(sums.size()), sums.data(), gsums.data());
   g.energy = gsums[0];
-  g.elastic = gsums[1];
-  g.external = gsums[2];
-  g.inertia = gsums[3];
-  g.contact = gsums[4];
-  g.volume = gsums[5];
+  g.volume = gsums[1];
+  g.shares = std::move(shares);
+  for (std::size_t k = 0; k < g.shares.size(); ++k) g.shares[k].second = gsums[k + 2];
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, t.min_J, Teuchos::outArg(g.min_J));
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, t.penetration, Teuchos::outArg(g.penetration));
   const long long counts[3] = {t.inverted, t.undefined, t.contacts};

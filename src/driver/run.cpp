@@ -45,11 +45,11 @@ std::string duration(double s) {
   return buf;
 }
 
-// ", contact detection 0.12" when the step detected self contact.
-std::string contact_time(const StepRecord& rec) {
-  if (rec.contact_rounds == 0) return "";
+// ", rounds 0.12" when the terms' rounds between solves (contact detection) took time.
+std::string rounds_time(const StepRecord& rec) {
+  if (rec.seconds_rounds == 0.0) return "";
   char buf[64];
-  std::snprintf(buf, sizeof buf, ", contact detection %.2f", rec.seconds_contact);
+  std::snprintf(buf, sizeof buf, ", rounds %.2f", rec.seconds_rounds);
   return buf;
 }
 
@@ -64,13 +64,16 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   u_previous_ = scene_->system().create_vector();
   // The sections that define the problem solved (not Solver or Output, which a restart may change).
   const auto& p = config_.params;
-  const Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},       {"Material", section_fingerprint(p.material)},
-                                {"Loading", section_fingerprint(p.loading)}, {"Skeleton", section_fingerprint(p.skeleton)},
-                                {"Contact", section_fingerprint(p.contact)}, {"Time", section_fingerprint(p.time)}};
+  Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},       {"Material", section_fingerprint(p.material)},
+                          {"Loading", section_fingerprint(p.loading)}, {"Skeleton", section_fingerprint(p.skeleton)},
+                          {"Contact", section_fingerprint(p.contact)}, {"Time", section_fingerprint(p.time)}};
+  p.terms.for_each([&](const char* section, const auto& params) { physics.push_back({section, section_fingerprint(params)}); });
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {
+    Output::TermStates states;
     at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get(),
-                                  dynamics_ ? &dynamics_->velocity() : nullptr, opt_.restart_anyway ? nullptr : &physics);
+                                  dynamics_ ? &dynamics_->velocity() : nullptr, opt_.restart_anyway ? nullptr : &physics, &states);
+    scene_->system().load_states(states);
     restart_step = at_.step;
   }
   OutputParameters output = config_.params.output;
@@ -169,9 +172,12 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   double dt = at_.increment > 0.0 ? at_.increment : target - at_.load;
   rec.cuts = at_.cuts;
   auto trial = scene.system().create_vector();
+  bool first_attempt = true;
   while (at_.load < target - 1e-14) {
     const double t = std::min(at_.load + dt, target);
     SolveReport predicted;  // the tangent predictor's solve, when there is one
+    scene.system().begin_step(StepStart{at_.load, t, u_.get(), first_attempt && rec.cuts == 0});
+    first_attempt = false;
     if (dynamics_)
       dynamics_->begin(at_.load, t, *u_, *trial);
     else
@@ -214,13 +220,15 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
         dynamics_->end(*trial, *u_);
       else
         u_->assign(*trial);
+      scene.system().end_step(*u_);
       at_.load = t;
       at_.increment = t < target - 1e-14 ? dt : 0.0;
       at_equilibrium_ = true;
       continue;
     }
-    if (dynamics_) dynamics_->abandon();
+    // Interrupted: the terms keep the state this attempt started from, which the checkpoint records.
     if (r.status == SolveStatus::Interrupted) return StepOutcome::Stopped;
+    scene.system().abandon_step();
     if (talk_) std::printf("  step did not converge: %s\n", r.reason().c_str());
     if (rec.cuts >= scene.max_cuts()) {
       if (comm_->getRank() == 0)
@@ -240,29 +248,21 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
 
 SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress,
                               StepRecord& rec) {
-  Scene& scene = *scene_;
-  if (!scene.contact()) return solver_->solve(trial, progress);
   (void)t;
+  System& sys = scene_->system();
   SolveReport sum;
+  // Round 0 sets the terms up at the first guess (contact pairs); after each converged solve the terms
+  // look at its state again, and the step ends when none asks for another solve.
   for (int round = 0;; ++round) {
-    // The first round pairs afresh at the step's first guess; later ones keep those pairs and add the
-    // samples the last solve pushed into contact. The step ends when a detection adds none, or after
-    // the scene's maximum of solves; either way the end state has been looked at.
-    const unsigned version = scene.system().pattern_version();
-    const ContactDetection d = scene.detect_contact(trial, round > 0);
-    rec.pattern_changes += scene.system().pattern_version() != version;
-    rec.seconds_contact += d.seconds;
-    rec.contact_pairs = scene.contact()->global_pairs();
-    rec.inside_depth = d.deepest;
-    ++rec.contact_rounds;
+    const auto start = std::chrono::steady_clock::now();
+    const System::Round terms = sys.round(trial, round);
+    rec.seconds_rounds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    rec.pattern_changes += terms.pattern_changed;
     if (talk_) {
-      std::printf("  contact round %d: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld targets refined%s), "
-                  "%lld tractions raised, %.2f s\n",
-                  round + 1, rec.contact_pairs, d.kept, d.inside, d.proximity, d.refined,
-                  d.unpaired ? (", " + std::to_string(d.unpaired) + " unpaired").c_str() : "", d.raised, d.seconds);
+      for (const auto& line : terms.lines) std::printf("  %s\n", line.c_str());
       std::fflush(stdout);
     }
-    if ((round > 0 && d.added + d.raised == 0) || round == scene.contact_rounds()) break;
+    if (round > 0 && !terms.again) break;  // round 0 always solves
     SolveReport r = solver_->solve(trial, progress);
     if (round > 0) r.accumulate(sum);
     sum = r;
@@ -285,7 +285,7 @@ SolveReport Simulation::first_guess(double t, Vector& trial) {
   // the tangent's energy was the lower). Not with contact either: the linearisation knows only the pairs
   // of the last state, so it can push free nodes through a surface before the step's detection sees them
   // (two blocks pressed together on 2 ranks then ended in another contact state than on 1).
-  const bool linearise = scene.tangent_predictor() && at_equilibrium_ && !extrapolate && !scene.contact();
+  const bool linearise = scene.tangent_predictor() && at_equilibrium_ && !extrapolate && sys.linearisable();
   if (!extrapolate && !linearise) return tangent;
   // A candidate replaces the guess when its energy is defined and below the guess's (or the guess's is not).
   EvaluationTotals best = sys.evaluate(trial, nullptr, nullptr);
@@ -322,10 +322,7 @@ void Simulation::write_step(int step, double load) {
     auto v = dynamics_->velocity().getLocalViewHost(Tpetra::Access::ReadOnly);
     fields.emplace_back("velocity", std::vector<double>(v.data(), v.data() + 3 * scene_->system().mesh().n_owned_nodes));
   }
-  if (ContactTerm* contact = scene_->contact()) {
-    scene_->system().evaluate(*u_, nullptr, nullptr);  // the pressure of this state
-    fields.emplace_back("contact_pressure", contact->pressure());
-  }
+  for (auto& f : scene_->system().node_fields(*u_)) fields.emplace_back(f.name, std::move(f.values));
   out_->write_step(step, load, *u_, fields);
 }
 
@@ -338,17 +335,24 @@ void Simulation::print_step(const StepRecord& rec) const {
   std::printf("  converged: %d Newton%s, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "
               "%.2f s (assembly %.2f, preconditioner %.2f in %d update%s%s, CG %.2f, line search %.2f%s)\n",
               rec.solve.newton_iterations, relaxed.c_str(), rec.solve.linear_iterations, 100.0 * (rec.volume_ratio - 1.0), rec.totals.min_J,
-              rec.totals.inverted, rec.solve.seconds_total + rec.seconds_contact, rec.solve.seconds_assembly,
+              rec.totals.inverted, rec.solve.seconds_total + rec.seconds_rounds, rec.solve.seconds_assembly,
               rec.solve.seconds_preconditioner, rec.solve.preconditioner_updates, rec.solve.preconditioner_updates == 1 ? "" : "s",
-              redone.c_str(), rec.solve.seconds_linear, rec.solve.seconds_line_search,
-              contact_time(rec).c_str());
-  if (dynamics_)
-    std::printf("  t = %.6g s: kinetic %.6g, elastic %.6g, potential %.6g, contact %.4g (total %.6g)\n", rec.time, rec.kinetic,
-                rec.totals.elastic, rec.totals.external, rec.totals.contact,
-                rec.kinetic + rec.totals.elastic + rec.totals.external + rec.totals.contact);
-  if (rec.totals.contacts > 0 || rec.contact_pairs > 0)
-    std::printf("  contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g\n",
-                rec.totals.contacts, rec.totals.penetration, rec.inside_depth, rec.totals.contact);
+              redone.c_str(), rec.solve.seconds_linear, rec.solve.seconds_line_search, rounds_time(rec).c_str());
+  if (dynamics_) {
+    // The mechanical energy: kinetic plus every term's share but inertia's (the step's incremental
+    // potential, zero at the step's end state only for an undamped step).
+    std::string parts;
+    double total = rec.kinetic;
+    for (const auto& [name, e] : rec.totals.shares) {
+      if (std::string(name) == "inertia") continue;
+      char buf[96];
+      std::snprintf(buf, sizeof buf, ", %s %.6g", name, e);
+      parts += buf;
+      total += e;
+    }
+    std::printf("  t = %.6g s: kinetic %.6g%s (total %.6g)\n", rec.time, rec.kinetic, parts.c_str(), total);
+  }
+  for (const auto& line : summary_) std::printf("  %s\n", line.c_str());
   std::fflush(stdout);
 }
 
@@ -390,7 +394,7 @@ int Simulation::run() {
     const StepOutcome outcome = advance(k, rec);
     if (outcome == StepOutcome::Failed) {
       // The last converged state, restartable (e.g. with other solver settings), then its fields.
-      if (out.checkpoint_every() > 0) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+      if (out.checkpoint_every() > 0) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
       write_step(k, at_.load);
       out.finish();
       return code(ExitCode::NoConvergence);
@@ -398,7 +402,7 @@ int Simulation::run() {
     if (outcome == StepOutcome::Stopped) {
       // Interrupted inside step k: checkpoint exactly where the load path stands (possibly inside a cut
       // step), so that a restart continues the same run.
-      out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+      out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
       out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d during step %d (load %.6g); checkpoint in %s\n", stop_signal_, k,
@@ -412,16 +416,18 @@ int Simulation::run() {
       rec.time = dynamics_->time_of(rec.load);
       rec.kinetic = dynamics_->kinetic_energy();
     }
+    rec.term_values = sys.log_values(rec.totals);
+    summary_ = sys.summary(rec.totals);
     out.log(rec);
     records_.push_back(rec);
     if (observer_) observer_(rec, u);
     // The checkpoint first: a step file that cannot be written must not cost the converged state.
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
-    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
     if (k % out.every() == 0 || k == n) write_step(k, rec.load);
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
-      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr);
+      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
       out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", stop_signal_, k,

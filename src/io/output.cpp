@@ -10,6 +10,7 @@
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Tpetra_Import.hpp>
+#include <Tpetra_MultiVector.hpp>
 #include <Tpetra_Vector.hpp>
 #include <hdf5.h>
 
@@ -241,6 +242,131 @@ void write_file(const std::string& path, MPI_Comm comm, bool root, Fill&& fill) 
   });
 }
 
+// The energy terms' states in group "/term NAME": a shared array KEY as dataset "shared KEY" holding
+// its length and then its values (never zero-length), a nodal array as "nodal KEY" with a row per node
+// in output order (rows x components), like /displacement.
+void write_term_states(hid_t file, const Output::TermStates& terms, const Mesh& m, const std::string& tmp, bool root) {
+  const long long n_owned = static_cast<long long>(m.n_owned_nodes);
+  for (const auto& [name, state] : terms) {
+    const std::string group = "/term " + name;
+    H5 g(H5Gcreate2(file, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, tmp + ": create " + group);
+    for (const auto& [key, values] : state.shared) {
+      std::vector<double> record{static_cast<double>(values.size())};
+      record.insert(record.end(), values.begin(), values.end());
+      const long long n = static_cast<long long>(record.size());
+      write_rows(file, group + "/shared " + key, H5T_NATIVE_DOUBLE, n, 1, 0, root ? n : 0, record.data(), tmp);
+    }
+    for (const auto& nodal : state.nodal) {
+      if (nodal.values.size() != static_cast<std::size_t>(n_owned * nodal.components))
+        throw std::logic_error("write_checkpoint: term '" + name + "' array '" + nodal.name + "' is not one row per owned node");
+      write_rows(file, group + "/nodal " + nodal.name, H5T_NATIVE_DOUBLE, m.global_nodes, nodal.components, m.first_output_node,
+                 n_owned, nodal.values.data(), tmp);
+    }
+  }
+}
+
+// Reads the states of the system's terms from a checkpoint (collective; a term the file has no group
+// for is left out). Each rank reads its block of nodal rows and a Tpetra import takes them to the
+// ranks owning their nodes.
+Output::TermStates read_term_states(const std::string& path, const System& sys) {
+  const Mesh& m = sys.mesh();
+  MPI_Comm comm = raw_comm(*sys.comm());
+  int rank = 0, P = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &P);
+  const long long N = m.global_nodes, r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
+  auto fail = [&](const std::string& why) { throw InputError("restart file '" + path + "': " + why, InputErrorKind::File); };
+  struct Block {
+    std::string term, key;
+    int components;
+    std::vector<double> values;  // this rank's block of rows
+  };
+  Output::TermStates states;
+  std::vector<Block> blocks;
+  std::vector<long long> gid(rows);
+  collectively(comm, [&] {
+    QuietHdf5 quiet;
+    H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
+    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());
+    if (fid < 0) fail("is not a readable HDF5 file");
+    H5 file(fid, H5Fclose, "open " + path);
+    auto read = [&](const std::string& name, hid_t type, long long first, long long count, int cols, void* out) {
+      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
+      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+      hsize_t start[2] = {static_cast<hsize_t>(first), 0}, cnt[2] = {static_cast<hsize_t>(count), static_cast<hsize_t>(cols)};
+      H5 mem(H5Screate_simple(cols == 1 ? 1 : 2, cnt, nullptr), H5Sclose, "memspace");
+      if (count > 0) {
+        H5Sselect_hyperslab(sp.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+      } else {
+        H5Sselect_none(sp.id());
+        H5Sselect_none(mem.id());
+      }
+      if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail("cannot read " + name);
+    };
+    auto extent = [&](const std::string& name, hsize_t dims[2]) {
+      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
+      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+      dims[1] = 1;
+      return H5Sget_simple_extent_dims(sp.id(), dims, nullptr);
+    };
+    if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
+      read("/node_gid", H5T_NATIVE_LLONG, r0, rows, 1, gid.data());
+    } else {
+      for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;
+    }
+    for (const auto& term : sys.terms()) {
+      const std::string group = std::string("/term ") + term->name();
+      if (H5Lexists(file.id(), group.c_str(), H5P_DEFAULT) <= 0) continue;
+      H5 g(H5Gopen2(file.id(), group.c_str(), H5P_DEFAULT), H5Gclose, path + ": " + group);
+      H5G_info_t info;
+      if (H5Gget_info(g.id(), &info) < 0) fail("cannot list " + group);
+      TermState state;
+      for (hsize_t k = 0; k < info.nlinks; ++k) {
+        char buf[256] = {0};
+        if (H5Lget_name_by_idx(g.id(), ".", H5_INDEX_NAME, H5_ITER_INC, k, buf, sizeof buf, H5P_DEFAULT) < 0) fail("cannot list " + group);
+        const std::string item = buf, dataset = group + "/" + item;
+        hsize_t dims[2] = {0, 1};
+        const int ndims = extent(dataset, dims);
+        if (item.rfind("shared ", 0) == 0) {
+          std::vector<double> record(dims[0]);
+          if (ndims != 1 || dims[0] < 1) fail(dataset + " is not a record (corrupt file?)");
+          read(dataset, H5T_NATIVE_DOUBLE, 0, static_cast<long long>(dims[0]), 1, record.data());
+          if (record[0] != static_cast<double>(dims[0] - 1)) fail(dataset + " does not hold its length (corrupt file?)");
+          state.shared.emplace_back(item.substr(7), std::vector<double>(record.begin() + 1, record.end()));
+        } else if (item.rfind("nodal ", 0) == 0) {
+          if (dims[0] != static_cast<hsize_t>(N)) fail(dataset + " does not have a row per node of this mesh");
+          Block b{term->name(), item.substr(6), static_cast<int>(dims[1]), std::vector<double>(rows * dims[1])};
+          read(dataset, H5T_NATIVE_DOUBLE, r0, rows, b.components, b.values.data());
+          blocks.push_back(std::move(b));
+        }
+      }
+      states.emplace_back(term->name(), std::move(state));
+    }
+  });
+  // Nodal rows to the ranks owning their nodes (the same blocks, in the same order, on every rank).
+  if (blocks.empty()) return states;
+  std::vector<GO> gids(gid.begin(), gid.end());
+  const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                                              Teuchos::ArrayView<const GO>(gids), 0, sys.comm()));
+  const Import import(block_map, sys.owned_nodes());
+  for (Block& b : blocks) {
+    MultiVector from(block_map, b.components), to(sys.owned_nodes(), b.components);
+    {
+      auto v = from.getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (long long r = 0; r < rows; ++r)
+        for (int c = 0; c < b.components; ++c) v(r, c) = b.values[r * b.components + c];
+    }
+    to.doImport(from, import, Tpetra::INSERT);
+    TermState::Nodal nodal{b.key, b.components, std::vector<double>(m.n_owned_nodes * b.components)};
+    auto v = to.getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t n = 0; n < m.n_owned_nodes; ++n)
+      for (int c = 0; c < b.components; ++c) nodal.values[n * b.components + c] = v(n, c);
+    for (auto& [name, state] : states)
+      if (name == b.term) state.nodal.push_back(std::move(nodal));
+  }
+  return states;
+}
+
 }  // namespace
 
 Output::Output(const OutputParameters& params, const System& system, const std::string& name, int steps,
@@ -264,11 +390,13 @@ Output::Output(const OutputParameters& params, const System& system, const std::
         if (own_temporary(entry.path().filename().string(), name_)) fs::remove(entry.path(), ec);
       // On restart keep the rows of the steps up to the checkpoint (a row written after it belongs to
       // a step that will be computed again).
-      open_csv(log_, dir_ + "/log.csv", restart_step,
-               "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
-               "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
-               "seconds_total,elastic_energy,external_energy,contact_energy,contacts,penetration,contact_pairs,"
-               "contact_rounds,seconds_contact,inside_depth,pattern_changes,time,kinetic_energy");
+      // The run's columns, then each energy term's (System::log_columns: its energy share and its own).
+      std::string header =
+          "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
+          "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
+          "seconds_total,seconds_rounds,pattern_changes,time,kinetic_energy";
+      for (const std::string& c : system.log_columns()) header += "," + c;
+      open_csv(log_, dir_ + "/log.csv", restart_step, header);
       open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
                "step,load,iteration,residual,cg_iterations,step_length,exact_hessian");
     });
@@ -610,12 +738,14 @@ void Output::write_log_row(const StepRecord& r) {
        << s.linear_iterations << "," << s.initial_residual << "," << s.final_residual << "," << r.totals.energy << ","
        << r.volume_ratio << "," << r.totals.min_J << "," << r.totals.inverted << "," << s.seconds_assembly << ","
        << s.seconds_preconditioner << "," << s.seconds_linear << "," << s.seconds_line_search << "," << s.seconds_total
-       << "," << r.totals.elastic << "," << r.totals.external << "," << r.totals.contact << "," << r.totals.contacts << ","
-       << r.totals.penetration << "," << r.contact_pairs << "," << r.contact_rounds << "," << r.seconds_contact << "," << r.inside_depth << "," << r.pattern_changes << "," << r.time << "," << r.kinetic << "\n";
+       << "," << r.seconds_rounds << "," << r.pattern_changes << "," << r.time << "," << r.kinetic;
+  for (double v : r.term_values) log_ << "," << v;
+  log_ << "\n";
   log_.flush();
 }
 
-void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous, const Vector* velocity) {
+void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous, const Vector* velocity,
+                              const TermStates& terms) {
   const Mesh& m = sys_.mesh();
   const long long n_owned = static_cast<long long>(m.n_owned_nodes);
   auto rows_of = [&](const Vector& v) {
@@ -646,6 +776,7 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
       write_rows(file, "/velocity", H5T_NATIVE_DOUBLE, m.global_nodes, 3, m.first_output_node, n_owned, vel.data(), tmp);
     write_attribute(file, "global_nodes", static_cast<double>(m.global_nodes));
     write_attribute(file, "steps", steps_);
+    write_term_states(file, terms, m, tmp, root_);
     // Each physics section's digest, and its entries, so that a restart can name what differs and accept
     // parameters added since at their defaults (a char dataset: an attribute holds at most 64 kB).
     for (const auto& section : physics_) {
@@ -658,7 +789,7 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
 }
 
 LoadState Output::read_checkpoint(const std::string& path, const System& sys, int steps, Vector& u,
-                                  Vector* previous, Vector* velocity, const Physics* physics) {
+                                  Vector* previous, Vector* velocity, const Physics* physics, TermStates* terms) {
   const Mesh& m = sys.mesh();
   MPI_Comm comm = raw_comm(*sys.comm());
   LoadState c;
@@ -833,6 +964,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
           fail(std::string(f.name) + " does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
     }
   });
+  if (terms) *terms = read_term_states(path, sys);
   return c;
 }
 

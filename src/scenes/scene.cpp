@@ -149,9 +149,16 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
       throw InputError(file + "Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" +
                        format_number(cs.thickness) + ")");
     cs.refine = d.contact.refine;
-    contact_rounds_ = d.contact.rounds;
+    cs.rounds = d.contact.rounds;
     contact_ = std::make_shared<ContactTerm>(*system_, cs, colliders_->shapes());
+    contact_->set_pose_source([c = colliders_.get()](std::size_t k, double t) { return c->pose(k, t); });
     system_->add_term(contact_);
+  }
+  // The registered terms the scene asks for (scenes/term_registry.hpp), after contact.
+  try {
+    d.terms.add_terms(TermContext{*system_, *comm, dynamic()});
+  } catch (const InputError& e) {
+    throw e.prefixed(file);
   }
   std::vector<int> fixed;
   free_.assign(mesh.n_owned_nodes, 1);
@@ -163,6 +170,9 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
           if (static_cast<std::size_t>(nd) < mesh.n_owned_nodes) free_[nd] = 0;
         }
   system_->set_fixed_dofs(fixed);
+  // Body force and gravity ramp with the load in a quasi-static run, and act in full from the start of
+  // a dynamic one.
+  system_->set_external_loads(loading_.body_force, loading_.gravity, !dynamic());
 }
 
 void Scene::apply_load(double t, Vector& u) {
@@ -175,21 +185,7 @@ void Scene::apply_load(double t, Vector& u) {
       for (int c = 0; c < 3; ++c)
         if (bc.prescribed[c]) v(3 * nd + c, 0) = d[c];
     }
-  const auto& b = loading_.body_force;
-  const auto& g = loading_.gravity;
-  const double ramp = dynamic() ? 1.0 : t;
-  system_->set_body_force({ramp * b[0], ramp * b[1], ramp * b[2]});
-  system_->set_gravity({ramp * g[0], ramp * g[1], ramp * g[2]});
-  if (contact_)
-    for (std::size_t k = 0; k < colliders_->size(); ++k) contact_->set_collider_pose(k, colliders_->pose(k, t));
-}
-
-ContactDetection Scene::detect_contact(const Vector& u, bool keep) {
-  ContactDetection d;
-  if (!contact_) return d;
-  d = contact_->detect(u, keep);
-  system_->update_pattern();
-  return d;
+  system_->set_load(t);  // every term's: the loads' ramp, the colliders' poses
 }
 
 void Scene::predict(double t0, double t1, Vector& u) const {

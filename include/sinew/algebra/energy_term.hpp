@@ -1,9 +1,21 @@
 // One term of the total energy a step minimizes, E(u) = sum_k E_k(u): the elastic energy of the mesh
 // (Eq. 14 and the other models, integrated), the potential of body forces and gravity, inertia (the
-// incremental potential of an implicit time step), contact penalties (Sec. 6). Each term gives its
-// value, its gradient and a positive semi-definite Hessian, added into what the System hands it, in
-// the manner of MFEM's NonlinearFormIntegrators on a NonlinearForm: the System sums, each term lives in
-// its own file, and a new physics is a new term rather than an edit of the element loop.
+// incremental potential of an implicit time step), contact penalties (Sec. 6), a pressure load. Each
+// term gives its value, its gradient and a positive semi-definite Hessian, added into what the System
+// hands it, in the manner of MFEM's NonlinearFormIntegrators on a NonlinearForm: the System sums, each
+// term lives in its own file, and a new physics is a new term rather than an edit of the element loop.
+//
+// A term also has a life of its own, which the driver runs for every term in the System's order (the
+// driver names no physics):
+//   set_load(t)          the load fraction of the coming evaluations: ramps, collider poses
+//   begin_step(s)        a solve from the converged state s.u (load s.t0) to load s.t1 starts
+//   round(u, r)          before the step's first solve (r = 0) and after each converged solve (r >= 1):
+//                        a term whose energy depends on the state it was set up at (contact pairs, a
+//                        Uzawa multiplier) updates it and asks for another solve
+//   end_step(u)          the step converged at u; abandon_step(): it failed and is cut
+//   save_state/load_state  what a restart needs besides the displacement (checkpoint.h5)
+// and says how it is reported: its log columns, lines of the step's summary, node fields of the step
+// files; and whether node relaxation may freeze its share of the gradient.
 //
 // Indices. A term sees the displacement on the System's column map: the mesh's overlap DOFs first
 // (3 * local node + component; owned nodes, then ghosts), followed by any extra columns the terms
@@ -21,6 +33,7 @@
 
 #include <cmath>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -31,11 +44,9 @@ using LocalMatrix = CrsMatrix::local_matrix_device_type;
 
 // Global results of one evaluation (already reduced over ranks when the System returns them).
 struct EvaluationTotals {
-  double energy = 0.0;    // the total, the sum of the terms' shares below
-  double elastic = 0.0;   // stored elastic energy
-  double external = 0.0;  // potential of body forces and gravity (minus their work)
-  double inertia = 0.0;   // the kinetic part of an implicit step's incremental potential
-  double contact = 0.0;   // contact penalty energy
+  double energy = 0.0;    // the total, the sum of the terms' shares
+  // Each term's share of the energy, in the System's order, named by EnergyTerm::name().
+  std::vector<std::pair<const char*, double>> shares;
   double volume = 0.0;    // sum over quadrature points of J * reference volume
   double min_J = 0.0;     // smallest J at a quadrature point
   long long inverted = 0;   // quadrature points with J <= 0
@@ -45,6 +56,48 @@ struct EvaluationTotals {
 
   // A finite energy with no undefined point: a state a predictor may offer.
   bool energy_defined() const { return undefined == 0 && std::isfinite(energy); }
+  // The share of the term named `name` (0 when the System has no such term).
+  double share(const std::string& name) const {
+    for (const auto& [n, e] : shares)
+      if (name == n) return e;
+    return 0.0;
+  }
+};
+
+// What a term keeps across steps that a restart needs, beyond the displacement: arrays the same on every
+// rank (`shared`, written once), and per-node arrays (`nodal`: `components` values per owned node, in
+// the owned node order; written by node id, so a restart on another number of ranks reads them).
+struct TermState {
+  struct Nodal {
+    std::string name;
+    int components = 1;
+    std::vector<double> values;
+  };
+  std::vector<std::pair<std::string, std::vector<double>>> shared;
+  std::vector<Nodal> nodal;
+  const std::vector<double>* find_shared(const std::string& name) const {
+    for (const auto& [n, v] : shared)
+      if (n == name) return &v;
+    return nullptr;
+  }
+  const Nodal* find_nodal(const std::string& name) const {
+    for (const auto& n : nodal)
+      if (n.name == name) return &n;
+    return nullptr;
+  }
+};
+
+// A solve of one step (or of a cut part of it) from the converged state u at load t0 to load t1.
+struct StepStart {
+  double t0 = 0.0, t1 = 0.0;
+  const Vector* u = nullptr;  // owned DOFs
+  bool first_attempt = true;   // the load step's first solve (not one after a cut): per-step counts restart
+};
+
+// What a term's round found: whether it needs another solve, and a line for the progress output.
+struct RoundResult {
+  bool again = false;
+  std::string line;
 };
 
 enum class Backend { Default, Serial };
@@ -63,21 +116,61 @@ struct TermOutput {
   Kokkos::View<double*, DeviceMemory> force;
   LocalMatrix matrix;
   int owned_dofs = 0;
-  EvaluationTotals totals;
+  double energy = 0.0;      // the term's energy share (this rank's); the System sums the shares
+  EvaluationTotals totals;  // volume, J and contact counts (this rank's, not yet reduced)
   ElementFields<DeviceMemory> fields;  // per-element outputs, when asked for (the elastic term)
 };
 
 class EnergyTerm {
  public:
   virtual ~EnergyTerm() = default;
+  // The term's name: its energy share's in the log ("<name>_energy") and in messages.
   virtual const char* name() const = 0;
-  // Adds the term's energy, gradient (if in.want_force) and PSD Hessian (if in.want_matrix).
+  // Adds the term's energy (into out.energy), gradient (if in.want_force) and PSD Hessian (if
+  // in.want_matrix).
   virtual void add(const TermInput& in, TermOutput& out) const = 0;
   // Node couplings (global node ids: row node, column node) beyond the mesh's element graph that the
   // Hessian needs in the rows of this rank's owned nodes. Asked by System::update_pattern.
   virtual void couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) const { (void)out; }
   // Called when the System's column map changed: resolve global ids to column indices again.
   virtual void columns_changed(const Map& columns) { (void)columns; }
+
+  // Lifecycle (see the top of this file). All are collective: every rank calls them in the same order.
+  virtual void set_load(double t) { (void)t; }
+  virtual void begin_step(const StepStart& s) { (void)s; }
+  virtual RoundResult round(const Vector& u, int round) {
+    (void)u;
+    (void)round;
+    return {};
+  }
+  virtual void end_step(const Vector& u) { (void)u; }
+  virtual void abandon_step() {}
+  virtual void save_state(TermState& state) const { (void)state; }
+  // Throws InputError when the state is not one this term can continue from (say which entry).
+  virtual void load_state(const TermState& state) { (void)state; }
+
+  // Node relaxation (System::relax_nodes) moves a node with the other terms' share of its gradient
+  // frozen: only a term linear in u (or with no share at any node) may allow it.
+  virtual bool allows_node_relaxation() const { return false; }
+  // The tangent predictor linearises the total energy about the last state: a term set up at a state
+  // (contact pairs found there) cannot be carried to a new one that way.
+  virtual bool linearisable() const { return true; }
+
+  // Reporting. Columns of log.csv after the energy share's, and their values for the step just logged
+  // (collective: may reduce); lines of the step's summary (rank 0 prints them); node fields of the step
+  // files (per owned node: `components` values, e.g. a pressure or a velocity).
+  virtual std::vector<std::string> log_columns() const { return {}; }
+  virtual std::vector<double> log_values(const EvaluationTotals& totals) const {
+    (void)totals;
+    return {};
+  }
+  virtual std::vector<std::string> summary(const EvaluationTotals& totals) const {
+    (void)totals;
+    return {};
+  }
+  // Names and components of the node fields; the fields themselves, of the last evaluation.
+  virtual std::vector<std::pair<std::string, int>> node_field_names() const { return {}; }
+  virtual void node_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }
 };
 
 }  // namespace sinew

@@ -76,12 +76,52 @@ class System {
   std::size_t global_fixed_dofs() const;
 
   // External loads (the external-force term): force per reference volume, and gravity (acceleration,
-  // times each element's density).
+  // times each element's density), in full; set_load(t) scales them by t unless `ramped` is false.
+  void set_external_loads(const std::array<double, 3>& force_per_reference_volume, const std::array<double, 3>& acceleration,
+                          bool ramped = true);
+  // The same at their current values (no ramp): tests, and the ramp's own setting.
   void set_body_force(const std::array<double, 3>& force_per_reference_volume);
   void set_gravity(const std::array<double, 3>& acceleration);
 
-  // Terms beyond the elastic energy and the external forces (which every system has).
+  // Terms beyond the elastic energy and the external forces (which every system has), summed in the
+  // order added. Their names must differ (they name log columns and checkpoint records).
   void add_term(std::shared_ptr<EnergyTerm> term);
+  const std::vector<std::shared_ptr<EnergyTerm>>& terms() const { return terms_; }
+  // The first term of type T, or null.
+  template <class T>
+  T* find_term() const {
+    for (const auto& t : terms_)
+      if (auto* p = dynamic_cast<T*>(t.get())) return p;
+    return nullptr;
+  }
+
+  // The terms' lifecycle (energy_term.hpp), each hook called on every term in order. Collective.
+  // The external loads' ramp: body force and gravity in full from load 0 (a dynamic run) or ramped.
+  void set_load(double t);
+  void begin_step(const StepStart& s);
+  // Every term's round at u; the pattern grown for the couplings they now need. `again`: some term
+  // asked for another solve; `lines`: what they report; `pattern_changed`: the matrix pattern grew.
+  struct Round {
+    bool again = false, pattern_changed = false;
+    std::vector<std::string> lines;
+  };
+  Round round(const Vector& u, int round);
+  void end_step(const Vector& u);
+  void abandon_step();
+  // Every term's state, by term name; load_states gives each term its own (a term whose name the
+  // checkpoint lacks gets none and keeps its fresh state).
+  std::vector<std::pair<std::string, TermState>> save_states() const;
+  void load_states(const std::vector<std::pair<std::string, TermState>>& states);
+  // The tangent predictor may linearise the energy (every term allows it).
+  bool linearisable() const;
+  // log.csv's term columns ("<term>_energy" and each term's own), and their values at a step's end.
+  std::vector<std::string> log_columns() const;
+  std::vector<double> log_values(const EvaluationTotals& totals) const;
+  // Every term's summary lines for a step's end.
+  std::vector<std::string> summary(const EvaluationTotals& totals) const;
+  // The terms' node fields at u (an evaluation first, when some term has any).
+  std::vector<TermState::Nodal> node_fields(const Vector& u) const;
+  std::vector<std::pair<std::string, int>> node_field_names() const;
   // Collective: asks every term for its couplings and rebuilds the graph with them when some are
   // missing (the pattern only grows). Returns true, on every rank, when it changed.
   bool update_pattern();
@@ -108,8 +148,9 @@ class System {
   // Nonlinear elimination of the residual's hot spots (ElasticTerm::relax): the owned nodes free in all
   // three components whose force holds at least `share` of |force|^2 (and up to `rings` element rings of
   // free owned nodes around them) are relaxed one by one, the rest held; u (owned DOFs) is updated.
-  // Only for a total energy of the elastic and external-force terms (the others are not linear in a
-  // node's displacement, and are left to Newton): returns zero totals otherwise. Collective; the
+  // Only when every term allows it (EnergyTerm::allows_node_relaxation: the elastic and external-force
+  // terms; the others are not linear in a node's displacement, and are left to Newton): returns zero
+  // totals otherwise. Collective; the
   // caller checks the new state's energy (nodes moved at once on two ranks may share an element).
   NodeRelaxationTotals relax_nodes(Vector& u, const Vector& force, double share, int rings,
                                    const NodeRelaxationSettings& settings) const;

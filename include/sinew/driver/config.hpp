@@ -21,6 +21,7 @@ struct SceneFileParameters {
   LoadingParameters loading;
   SkeletonParameters skeleton;
   ContactParameters contact;
+  SceneTerms terms;  // the registered terms' sections (scenes/term_registry.hpp)
   TimeParameters time;
   SolverParameters solver;
   OutputParameters output;
@@ -34,6 +35,7 @@ struct SceneFileParameters {
     v.section("Loading", loading, "boundary conditions, body force and load steps");
     v.section("Skeleton", skeleton, "bones that drive the flesh");
     v.section("Contact", contact, "self contact and kinematic colliders (penalty springs on the surface)");
+    terms.visit(v);
     v.section("Time", time, "quasi-static load steps, or time steps with mass (dynamics)");
     v.section("Solver", solver, "Newton, CG and multigrid parameters");
     v.section("Output", output, "HDF5/XDMF fields, log and checkpoints");
@@ -50,7 +52,8 @@ struct SceneConfig {
   SceneFileParameters params;   // every section, parsed and checked
 
   SceneDescription scene() const {
-    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton, params.contact, params.time};
+    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton, params.contact, params.terms,
+            params.time};
   }
 };
 

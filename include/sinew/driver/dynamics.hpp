@@ -29,8 +29,6 @@ class Dynamics {
   void begin(double t0, double t1, const Vector& u, Vector& trial);
   // After a converged solve for y: u and the velocity to the step's end.
   void end(const Vector& y, Vector& u);
-  // After a failed solve: no inertia until the next begin.
-  void abandon() { inertia_->off(); }
 
  private:
   Scene& scene_;

@@ -76,6 +76,7 @@ class Simulation {
   Teuchos::RCP<Vector> u_;
   Teuchos::RCP<Vector> u_previous_;  // the converged state before u_ (at at_.previous_load), for the predictor
   std::vector<StepRecord> records_;
+  std::vector<std::string> summary_;  // the terms' lines for the last step (System::summary)
   LoadState at_;  // where the run stands: the state in u_
   std::function<int()> stop_check_;
   std::function<void(const StepRecord&, const Vector&)> observer_;

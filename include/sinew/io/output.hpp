@@ -18,7 +18,8 @@
 //   DIR/skin_rest.obj      PC2 point cache of the rest skin, made from DIR/skin.frames (skin_cache.hpp)
 //   DIR/log.csv            one row per converged load step
 //   DIR/newton.csv         one row per Newton iteration (residual, CG iterations, step length)
-//   DIR/checkpoint.h5      /displacement and where the load path stood: everything a restart needs
+//   DIR/checkpoint.h5      /displacement, where the load path stood and the energy terms' states
+//                          (/term NAME/...): everything a restart needs
 #pragma once
 
 #include <sinew/algebra/system.hpp>
@@ -78,12 +79,10 @@ struct StepRecord {
   double volume_ratio = 1.0;
   // Dynamic runs: the time at the step's end and the kinetic energy there.
   double time = 0.0, kinetic = 0.0;
-  // Self contact: detect-and-solve rounds, pairs after the last detection, seconds spent detecting, and
-  // the deepest a surface point lies inside the body at the end (from a detection of the end state).
-  int contact_rounds = 0;
-  long long contact_pairs = 0;
-  double seconds_contact = 0.0, inside_depth = 0.0;
-  int pattern_changes = 0;  // times the matrix pattern grew for new contact couplings
+  double seconds_rounds = 0.0;  // in the terms' rounds between solves (contact detection)
+  int pattern_changes = 0;      // times the matrix pattern grew for the terms' new couplings
+  // The terms' columns of the log (System::log_columns): each term's energy share and its own values.
+  std::vector<double> term_values;
 };
 
 // Where a run stands on its load path: everything a restart needs besides the displacement. Inside a
@@ -149,8 +148,10 @@ class Output {
   // previous: the converged state at at.previous_load, kept for the predictor (written when given and
   // at.previous_load >= 0).
   // velocity: a dynamic run's, which a restart needs to continue the same trajectory.
+  // terms: the energy terms' states (System::save_states), written as /term NAME/... datasets.
+  using TermStates = std::vector<std::pair<std::string, TermState>>;
   void write_checkpoint(const LoadState& at, const Vector& u, const Vector* previous = nullptr,
-                        const Vector* velocity = nullptr);
+                        const Vector* velocity = nullptr, const TermStates& terms = {});
 
   // Collective: reads a checkpoint into u (which must live on the same mesh, on any number of ranks).
   // Throws InputError (kind File) when the file is missing, unreadable, corrupt, from another mesh or
@@ -165,9 +166,11 @@ class Output {
     SectionFingerprint fingerprint;
   };
   using Physics = std::vector<PhysicsSection>;
+  // With terms given, the states of the system's terms the checkpoint holds are read into it (per-node
+  // arrays to this run's owned nodes, whatever the number of ranks that wrote them).
   static LoadState read_checkpoint(const std::string& path, const System& system, int steps, Vector& u,
                                    Vector* previous = nullptr, Vector* velocity = nullptr,
-                                   const Physics* physics = nullptr);
+                                   const Physics* physics = nullptr, TermStates* terms = nullptr);
   // The scene's physics sections, whose digests and entries every checkpoint written after this stores.
   void set_physics(Physics physics) { physics_ = std::move(physics); }
 

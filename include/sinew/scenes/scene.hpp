@@ -20,6 +20,7 @@
 #include <sinew/scenes/contact.hpp>
 #include <sinew/scenes/region.hpp>
 #include <sinew/scenes/skeleton.hpp>
+#include <sinew/scenes/term_registry.hpp>
 #include <sinew/scenes/time.hpp>
 
 #include <functional>
@@ -113,6 +114,7 @@ struct SceneDescription {
   LoadingParameters loading;
   SkeletonParameters skeleton;
   ContactParameters contact;
+  SceneTerms terms;
   TimeParameters time;
 };
 
@@ -142,7 +144,8 @@ class Scene {
   bool tangent_predictor() const { return !dynamic() && loading_.predictor == LoadingParameters::Predictor::Tangent; }
   const std::string& name() const { return name_; }
 
-  // Sets the Dirichlet entries of u (owned DOFs) and the body force for load fraction t.
+  // Sets the Dirichlet entries of u (owned DOFs) for load fraction t, and every term's load
+  // (System::set_load: the body force's ramp, the colliders' poses).
   void apply_load(double t, Vector& u);
 
   // A better start for the step from load t0 to t1 than the state at t0: the free nodes carried along
@@ -155,13 +158,10 @@ class Scene {
   // The starting velocity of a dynamic run: Time/Initial velocity plus Initial spin x (X - centroid).
   void initial_velocity(Vector& v) const;
 
-  // Contact (null without a Contact section). Collider poses follow apply_load.
+  // Contact (null without a Contact section): a term of the system, whose rounds the driver runs as
+  // every term's (System::round). Collider poses follow apply_load.
   ContactTerm* contact() { return contact_.get(); }
   bool self_contact() const { return contact_ && contact_->settings().self; }
-  int contact_rounds() const { return contact_rounds_; }
-  // Collective: self-contact pairs at u, and the system's pattern grown for them.
-  // With `keep`, pairs of the last pass are kept (see ContactTerm::detect).
-  ContactDetection detect_contact(const Vector& u, bool keep = false);
 
  private:
   std::string name_;
@@ -171,7 +171,6 @@ class Scene {
   std::unique_ptr<Skeleton> skeleton_;
   std::unique_ptr<Colliders> colliders_;
   std::shared_ptr<ContactTerm> contact_;
-  int contact_rounds_ = 1;
   std::vector<BoundaryCondition> bcs_;
   std::vector<char> free_;  // owned nodes with no prescribed component
   Kokkos::View<double* [3]>::HostMirror X_;  // reference coordinates of local nodes

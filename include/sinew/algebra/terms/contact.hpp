@@ -43,6 +43,7 @@
 #include <sinew/discretization/boundary.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -82,6 +83,7 @@ struct ContactSettings {
   double thickness = 0.0;  // delta: the springs act below this gap (>= 0)
   double margin = 0.0;     // proximity pairing distance (> thickness)
   bool refine = true;      // walk targets to the closest deformed-surface point
+  int rounds = 10;         // at most this many detect-and-solve rounds per step (round())
 };
 
 // What one detection pass found (global counts).
@@ -108,6 +110,26 @@ class ContactTerm final : public EnergyTerm {
   void couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) const override;
   void columns_changed(const Map& columns) override;
 
+  // Lifecycle (energy_term.hpp). set_load: the colliders' poses (set_pose_source). round: a detection
+  // (fresh at round 0, keeping the pairs after) with the Uzawa update of the tractions; another solve
+  // while a detection adds pairs that push or raises tractions, up to settings().rounds. The pairs and
+  // tractions a step ends with (or a failed attempt leaves) are the state a checkpoint keeps.
+  void set_load(double t) override;
+  void begin_step(const StepStart& s) override;
+  RoundResult round(const Vector& u, int round) override;
+  void end_step(const Vector& u) override;
+  void abandon_step() override;
+  void save_state(TermState& state) const override;
+  void load_state(const TermState& state) override;
+  bool linearisable() const override { return false; }
+  std::vector<std::string> log_columns() const override;
+  std::vector<double> log_values(const EvaluationTotals& totals) const override;
+  std::vector<std::string> summary(const EvaluationTotals& totals) const override;
+  std::vector<std::pair<std::string, int>> node_field_names() const override;
+  void node_fields(std::vector<TermState::Nodal>& fields) const override;
+  // Where collider k stands at load fraction t.
+  void set_pose_source(std::function<Rigid(std::size_t k, double t)> pose_of) { pose_of_ = std::move(pose_of); }
+
   // Collective: self-contact pairs at displacement u (owned DOFs). Call System::update_pattern after.
   // With `keep`, the pairs of the last pass stay as they are (same target, weights and normal, so the
   // energy a converged state minimized does not move) while their gap is within the margin, and only
@@ -126,6 +148,13 @@ class ContactTerm final : public EnergyTerm {
   // Pairs kept on this rank and their global count.
   std::size_t local_pairs() const { return pairs_.size(); }
   long long global_pairs() const { return global_pairs_; }
+  // The rounds, pairs and seconds of the load step under way (or just ended).
+  struct StepCounts {
+    int rounds = 0;
+    long long pairs = 0;
+    double seconds = 0.0, inside_depth = 0.0;
+  };
+  const StepCounts& step_counts() const { return step_; }
 
   // One self-contact spring (public for tests).
   struct Pair {
@@ -157,6 +186,25 @@ class ContactTerm final : public EnergyTerm {
     double beta[3], normal[3], lambda;
   };
   std::vector<Chosen> chosen_;
+  // The detection's steps (contact.cpp).
+  struct Positions;
+  struct Candidate;
+  long long update_collider_tractions(const Positions& at, bool keep);
+  void gather_surface(Positions& at) const;
+  bool excluded(int triangle, int vertex) const;  // the triangle touches the vertex's ring at rest
+  std::vector<Candidate> kept_candidates(const Positions& at, const std::vector<Chosen>& previous, std::vector<char>& paired,
+                                         ContactDetection& stats) const;
+  std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
+                                           const std::vector<double>& carried, ContactDetection& stats) const;
+  void proximity_candidates(const Positions& at, const std::vector<char>& paired, const std::vector<double>& carried,
+                            std::vector<Candidate>& found) const;
+  long long choose(std::vector<Candidate> all, ContactDetection& stats);  // fills chosen_; returns new pushing pairs
+  void install();  // pairs_ from chosen_
+  void commit();
+  std::vector<Chosen> committed_chosen_;
+  std::vector<double> committed_collider_lambda_;
+  std::function<Rigid(std::size_t, double)> pose_of_;
+  StepCounts step_;
   long long global_pairs_ = 0;
   int rank_ = 0;
   mutable std::vector<double> pressure_;

@@ -17,9 +17,16 @@ class ExternalForceTerm final : public EnergyTerm {
   // Lumped volume and mass of the owned nodes.
   ExternalForceTerm(const std::vector<double>& nodal_volume, const std::vector<double>& nodal_mass);
 
-  const char* name() const override { return "external force"; }
+  const char* name() const override { return "external"; }
   void add(const TermInput& in, TermOutput& out) const override;
+  // Linear in u: node relaxation may freeze its share of a node's gradient.
+  bool allows_node_relaxation() const override { return true; }
+  // The loads at load fraction t: t times the full ones when ramped (quasi-static), else in full.
+  void set_load(double t) override;
 
+  // The full loads and whether set_load ramps them.
+  void set_full(const std::array<double, 3>& b, const std::array<double, 3>& g, bool ramped);
+  // The loads now (until the next set_load).
   void set_body_force(const std::array<double, 3>& b) { body_ = b; }
   void set_gravity(const std::array<double, 3>& g) { gravity_ = g; }
   bool active() const;
@@ -27,6 +34,8 @@ class ExternalForceTerm final : public EnergyTerm {
  private:
   Kokkos::View<double*, DeviceMemory> volume_, mass_;
   std::array<double, 3> body_{{0.0, 0.0, 0.0}}, gravity_{{0.0, 0.0, 0.0}};
+  std::array<double, 3> full_body_{{0.0, 0.0, 0.0}}, full_gravity_{{0.0, 0.0, 0.0}};
+  bool ramped_ = true;
 };
 
 }  // namespace sinew

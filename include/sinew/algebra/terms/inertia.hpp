@@ -33,6 +33,8 @@ class InertiaTerm final : public EnergyTerm {
                 const CrsMatrix* K_start, double beta);
   // No inertia (between dynamic steps, or a quasi-static run): the term adds nothing.
   void off() { active_ = false; }
+  // After a failed solve: no inertia until the next set_step.
+  void abandon_step() override { off(); }
 
   // 1/2 v^T M v over all ranks (collective).
   double kinetic_energy(const Vector& v) const;
