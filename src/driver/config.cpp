@@ -57,7 +57,7 @@ SceneConfig read_scene(const std::string& path) {
   for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
   for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
   for (auto& [name, collider] : c.params.contact.colliders) resolve(collider.surface);
-  for (auto& [name, load] : std::get<PressureParameters>(c.params.terms.parameters).loads) resolve(load.region.surface);
+  c.params.terms.resolve_paths(resolve);
   return c;
 }
 

@@ -4,6 +4,8 @@
 #include <Tpetra_CrsMatrix.hpp>
 #include <Tpetra_Vector.hpp>
 
+#include <cstdio>
+
 namespace sinew {
 
 Dynamics::Dynamics(Scene& scene) : scene_(scene), p_(scene.time()), end_time_(scene.time().end_time()) {
@@ -17,7 +19,7 @@ Dynamics::Dynamics(Scene& scene) : scene_(scene), p_(scene.time()), end_time_(sc
   if (p_.rayleigh_stiffness > 0.0) K_start_ = sys.create_mesh_matrix();
 }
 
-void Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial) {
+SolveReport Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial) {
   System& sys = scene_.system();
   h_ = (t1 - t0) * end_time_;
   const bool midpoint = p_.integrator == TimeParameters::Integrator::ImplicitMidpoint;
@@ -39,9 +41,10 @@ void Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial) {
   }
   if (K_start_) sys.elastic_hessian(u, *K_start_);
   inertia_->set_step(reach * reach, reach, *predictor_, u, p_.rayleigh_mass, K_start_.get(), p_.rayleigh_stiffness);
+  return {};
 }
 
-void Dynamics::end(const Vector& y, Vector& u) {
+void Dynamics::end(double, double, const Vector& y, Vector& u) {
   inertia_->off();
   if (p_.integrator == TimeParameters::Integrator::ImplicitMidpoint) {
     // u_(n+1) = 2 y - u_n; v_(n+1) = 2 (u_(n+1) - u_n) / h - v_n = 4 (y - u_n) / h - v_n
@@ -51,6 +54,36 @@ void Dynamics::end(const Vector& y, Vector& u) {
     v_->update(1.0 / h_, y, -1.0 / h_, u, 0.0);
     u.assign(y);
   }
+}
+
+std::string Dynamics::describe(double load) const {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "t = %.6g s", time_of(load));
+  return buf;
+}
+
+void Dynamics::record(StepRecord& rec) const {
+  rec.time = time_of(rec.load);
+  rec.kinetic = kinetic_energy();
+}
+
+std::vector<std::string> Dynamics::summary(const StepRecord& rec) const {
+  // The mechanical energy: kinetic plus every term's share but inertia's (the step's incremental
+  // potential, zero at the step's end state only for an undamped step).
+  std::string parts;
+  double total = rec.kinetic;
+  for (const auto& [name, e] : rec.totals.shares) {
+    if (std::string(name) == inertia_->name()) continue;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, ", %s %.6g", name, e);
+    parts += buf;
+    total += e;
+  }
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "t = %.6g s: kinetic %.6g", rec.time, rec.kinetic);
+  char tail[64];
+  std::snprintf(tail, sizeof tail, " (total %.6g)", total);
+  return {std::string(buf) + parts + tail};
 }
 
 }  // namespace sinew

@@ -4,6 +4,7 @@
 #include <sinew/core/exit_codes.hpp>
 #include <sinew/discretization/rig_file.hpp>
 #include <sinew/driver/dynamics.hpp>
+#include <sinew/driver/quasi_static.hpp>
 #include <sinew/driver/info.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/driver/signals.hpp>
@@ -59,9 +60,13 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
     : config_(config), opt_(options), comm_(comm.is_null() ? Tpetra::getDefaultComm() : comm) {
   scene_ = std::make_unique<Scene>(config_.scene(), comm_);
   solver_ = std::make_unique<NonlinearSolver>(scene_->system(), config_.params.solver);
-  if (scene_->dynamic()) dynamics_ = std::make_unique<Dynamics>(*scene_);
+  talk_ = comm_->getRank() == 0 && !opt_.quiet;
   u_ = scene_->system().create_vector();
   u_previous_ = scene_->system().create_vector();
+  if (scene_->dynamic())
+    stepper_ = std::make_unique<Dynamics>(*scene_);
+  else
+    stepper_ = std::make_unique<QuasiStatic>(*scene_, *solver_, at_, *u_previous_, at_equilibrium_, talk_, config_.params.time.frame_rate);
   // The sections that define the problem solved (not Solver or Output, which a restart may change).
   const auto& p = config_.params;
   Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},       {"Material", section_fingerprint(p.material)},
@@ -72,7 +77,7 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   if (!opt_.restart_file.empty()) {
     Output::TermStates states;
     at_ = Output::read_checkpoint(opt_.restart_file, scene_->system(), scene_->steps(), *u_, u_previous_.get(),
-                                  dynamics_ ? &dynamics_->velocity() : nullptr, opt_.restart_anyway ? nullptr : &physics, &states);
+                                  stepper_->velocity(), opt_.restart_anyway ? nullptr : &physics, &states);
     scene_->system().load_states(states);
     restart_step = at_.step;
   }
@@ -97,10 +102,8 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
   const double frame_rate = p.time.frame_rate;
   if (skeleton.rig())
     out_->set_frame_clock([&skeleton](double load) { return skeleton.rig_seconds(load); }, frame_rate);
-  else if (dynamics_)
-    out_->set_frame_clock([d = dynamics_.get()](double load) { return d->time_of(load); }, frame_rate);
   else
-    out_->set_frame_clock([steps = scene_->steps(), frame_rate](double load) { return load * steps / frame_rate; }, frame_rate);
+    out_->set_frame_clock([s = stepper_.get()](double load) { return s->time_of(load); }, frame_rate);
   if (skeleton.rig() && out_->skin_caches()) {
     SkinRig rig;
     for (const RigNode& node : skeleton.rig()->nodes) {
@@ -110,7 +113,6 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
     rig.pose = [&skeleton](double load) { return skeleton.rig_pose(load); };
     out_->set_skin_rig(std::move(rig));
   }
-  talk_ = comm_->getRank() == 0 && !opt_.quiet;
   // Signals are checked collectively, so that every rank stops at the same point.
   auto comm_copy = comm_;
   stop_check_ = [comm_copy] {
@@ -129,14 +131,14 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
 
 Simulation::~Simulation() = default;
 
-const Vector* Simulation::velocity() const { return dynamics_ ? &dynamics_->velocity() : nullptr; }
+const Vector* Simulation::velocity() const { return stepper_->velocity(); }
 
 void Simulation::set_stop_check(std::function<int()> check) { stop_check_ = std::move(check); }
 
 void Simulation::set_initial(const Vector& u, const Vector* velocity) {
   if (!opt_.restart_file.empty()) throw std::logic_error("Simulation::set_initial: not with a restart");
   u_->assign(u);
-  if (velocity && dynamics_) dynamics_->velocity().assign(*velocity);
+  if (velocity && stepper_->velocity()) stepper_->velocity()->assign(*velocity);
   initial_given_ = true;
 }
 
@@ -178,10 +180,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     SolveReport predicted;  // the tangent predictor's solve, when there is one
     scene.system().begin_step(StepStart{at_.load, t, u_.get(), first_attempt && rec.cuts == 0});
     first_attempt = false;
-    if (dynamics_)
-      dynamics_->begin(at_.load, t, *u_, *trial);
-    else
-      predicted = first_guess(t, *trial);
+    predicted = stepper_->begin(at_.load, t, *u_, *trial);
     if (talk_) {
       const double now = wall_seconds(), done = at_.load - start_load_, elapsed = now - started_;
       // The pace of the last two steps, not of the whole run: steps grow as a motion creases the
@@ -191,12 +190,9 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
       std::string eta;
       if (done > 1e-12 && elapsed > 1.0 && at_.load - from.first > 1e-12)
         eta = ", ~" + duration((now - from.second) / (at_.load - from.first) * (1.0 - at_.load)) + " left";
-      if (dynamics_)
-        std::printf("step %d/%d  t = %.6g s%s  (%s elapsed%s)\n", k, n, dynamics_->time_of(t),
-                    rec.cuts ? "  (after cutting the time step)" : "", duration(elapsed).c_str(), eta.c_str());
-      else
-        std::printf("step %d/%d  load %.4g%s  (%s elapsed%s)\n", k, n, t, rec.cuts ? "  (after cutting the increment)" : "",
-                    duration(elapsed).c_str(), eta.c_str());
+      std::printf("step %d/%d  %s%s%s%s  (%s elapsed%s)\n", k, n, stepper_->describe(t).c_str(),
+                  rec.cuts ? "  (after cutting the " : "", rec.cuts ? stepper_->cut_name() : "", rec.cuts ? ")" : "",
+                  duration(elapsed).c_str(), eta.c_str());
       std::fflush(stdout);
     }
     auto progress = [&](const NewtonIterate& it) {
@@ -212,14 +208,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
     rec.solve.final_residual = r.final_residual;
     if (r.converged()) {
-      if (scene.extrapolate()) {
-        u_previous_->assign(*u_);
-        at_.previous_load = at_.load;
-      }
-      if (dynamics_)
-        dynamics_->end(*trial, *u_);
-      else
-        u_->assign(*trial);
+      stepper_->end(at_.load, t, *trial, *u_);
       scene.system().end_step(*u_);
       at_.load = t;
       at_.increment = t < target - 1e-14 ? dt : 0.0;
@@ -271,59 +260,18 @@ SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(
   return sum;
 }
 
-SolveReport Simulation::first_guess(double t, Vector& trial) {
-  Scene& scene = *scene_;
-  const System& sys = scene.system();
-  SolveReport tangent;
-  trial.assign(*u_);
-  scene.predict(at_.load, t, trial);
-  scene.apply_load(t, trial);
-  const double span = at_.load - at_.previous_load;
-  const bool extrapolate = scene.extrapolate() && at_.previous_load >= 0.0 && span > 1e-14;
-  // The tangent only where nothing extrapolates: from the second step on the extrapolation starts closer
-  // (the 32 x 32 x 64 stretch's second step from the tangent: 5 Newton iterations, extrapolated: 3, although
-  // the tangent's energy was the lower). Not with contact either: the linearisation knows only the pairs
-  // of the last state, so it can push free nodes through a surface before the step's detection sees them
-  // (two blocks pressed together on 2 ranks then ended in another contact state than on 1).
-  const bool linearise = scene.tangent_predictor() && at_equilibrium_ && !extrapolate && sys.linearisable();
-  if (!extrapolate && !linearise) return tangent;
-  // A candidate replaces the guess when its energy is defined and below the guess's (or the guess's is not).
-  EvaluationTotals best = sys.evaluate(trial, nullptr, nullptr);
-  const char* chosen = "the last state";
-  auto consider = [&](const Vector& candidate, const char* name) {
-    const EvaluationTotals e = sys.evaluate(candidate, nullptr, nullptr);
-    if (e.energy_defined() && !(best.energy_defined() && best.energy <= e.energy)) {
-      trial.assign(candidate);
-      best = e;
-      chosen = name;
-    }
-  };
-  if (extrapolate) {
-    auto candidate = sys.create_vector();
-    // u_ + (t - load) / (load - previous) (u_ - u_previous): exact for a displacement linear in the load.
-    candidate->update(1.0 + (t - at_.load) / span, *u_, -(t - at_.load) / span, *u_previous_, 0.0);
-    scene.apply_load(t, *candidate);
-    consider(*candidate, "extrapolated");
-  }
-  if (linearise) {
-    tangent = solver_->tangent(*u_, trial, best.energy_defined() ? best.energy : HUGE_VAL);
-    if (tangent.converged()) chosen = "tangent";
-    if (talk_) {
-      std::printf("  predictor: %s (tangent: %d CG)\n", chosen, tangent.linear_iterations);
-      std::fflush(stdout);
-    }
-  }
-  return tangent;
-}
-
 void Simulation::write_step(int step, double load) {
   Output::NodeFields fields;
-  if (dynamics_) {
-    auto v = dynamics_->velocity().getLocalViewHost(Tpetra::Access::ReadOnly);
+  if (const Vector* velocity = stepper_->velocity()) {
+    auto v = velocity->getLocalViewHost(Tpetra::Access::ReadOnly);
     fields.emplace_back("velocity", std::vector<double>(v.data(), v.data() + 3 * scene_->system().mesh().n_owned_nodes));
   }
   for (auto& f : scene_->system().node_fields(*u_)) fields.emplace_back(f.name, std::move(f.values));
   out_->write_step(step, load, *u_, fields);
+}
+
+void Simulation::checkpoint() {
+  out_->write_checkpoint(at_, *u_, u_previous_.get(), stepper_->velocity(), scene_->system().save_states());
 }
 
 void Simulation::print_step(const StepRecord& rec) const {
@@ -338,20 +286,7 @@ void Simulation::print_step(const StepRecord& rec) const {
               rec.totals.inverted, rec.solve.seconds_total + rec.seconds_rounds, rec.solve.seconds_assembly,
               rec.solve.seconds_preconditioner, rec.solve.preconditioner_updates, rec.solve.preconditioner_updates == 1 ? "" : "s",
               redone.c_str(), rec.solve.seconds_linear, rec.solve.seconds_line_search, rounds_time(rec).c_str());
-  if (dynamics_) {
-    // The mechanical energy: kinetic plus every term's share but inertia's (the step's incremental
-    // potential, zero at the step's end state only for an undamped step).
-    std::string parts;
-    double total = rec.kinetic;
-    for (const auto& [name, e] : rec.totals.shares) {
-      if (std::string(name) == "inertia") continue;
-      char buf[96];
-      std::snprintf(buf, sizeof buf, ", %s %.6g", name, e);
-      parts += buf;
-      total += e;
-    }
-    std::printf("  t = %.6g s: kinetic %.6g%s (total %.6g)\n", rec.time, rec.kinetic, parts.c_str(), total);
-  }
+  for (const auto& line : stepper_->summary(rec)) std::printf("  %s\n", line.c_str());
   for (const auto& line : summary_) std::printf("  %s\n", line.c_str());
   std::fflush(stdout);
 }
@@ -394,7 +329,7 @@ int Simulation::run() {
     const StepOutcome outcome = advance(k, rec);
     if (outcome == StepOutcome::Failed) {
       // The last converged state, restartable (e.g. with other solver settings), then its fields.
-      if (out.checkpoint_every() > 0) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
+      if (out.checkpoint_every() > 0) checkpoint();
       write_step(k, at_.load);
       out.finish();
       return code(ExitCode::NoConvergence);
@@ -402,7 +337,7 @@ int Simulation::run() {
     if (outcome == StepOutcome::Stopped) {
       // Interrupted inside step k: checkpoint exactly where the load path stands (possibly inside a cut
       // step), so that a restart continues the same run.
-      out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
+      checkpoint();
       out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d during step %d (load %.6g); checkpoint in %s\n", stop_signal_, k,
@@ -412,10 +347,7 @@ int Simulation::run() {
     at_ = LoadState{k, rec.load, 0.0, 0, at_.previous_load, {}};
     rec.totals = sys.evaluate(u, nullptr, nullptr);
     rec.volume_ratio = rec.totals.volume / V0;
-    if (dynamics_) {
-      rec.time = dynamics_->time_of(rec.load);
-      rec.kinetic = dynamics_->kinetic_energy();
-    }
+    stepper_->record(rec);
     rec.term_values = sys.log_values(rec.totals);
     summary_ = sys.summary(rec.totals);
     out.log(rec);
@@ -423,11 +355,11 @@ int Simulation::run() {
     if (observer_) observer_(rec, u);
     // The checkpoint first: a step file that cannot be written must not cost the converged state.
     const bool checkpoint_due = out.checkpoint_every() > 0 && (k % out.checkpoint_every() == 0 || k == n);
-    if (checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
+    if (checkpoint_due) checkpoint();
     if (k % out.every() == 0 || k == n) write_step(k, rec.load);
     print_step(rec);
     if (k < n && (stop_signal_ = stop_check_()) != 0) {
-      if (!checkpoint_due) out.write_checkpoint(at_, u, u_previous_.get(), dynamics_ ? &dynamics_->velocity() : nullptr, sys.save_states());
+      if (!checkpoint_due) checkpoint();
       out.finish();
       if (comm_->getRank() == 0)
         std::fprintf(stderr, "sinew: stopped by signal %d after step %d; checkpoint in %s\n", stop_signal_, k,

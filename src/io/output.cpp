@@ -265,108 +265,6 @@ void write_term_states(hid_t file, const Output::TermStates& terms, const Mesh& 
   }
 }
 
-// Reads the states of the system's terms from a checkpoint (collective; a term the file has no group
-// for is left out). Each rank reads its block of nodal rows and a Tpetra import takes them to the
-// ranks owning their nodes.
-Output::TermStates read_term_states(const std::string& path, const System& sys) {
-  const Mesh& m = sys.mesh();
-  MPI_Comm comm = raw_comm(*sys.comm());
-  int rank = 0, P = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &P);
-  const long long N = m.global_nodes, r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
-  auto fail = [&](const std::string& why) { throw InputError("restart file '" + path + "': " + why, InputErrorKind::File); };
-  struct Block {
-    std::string term, key;
-    int components;
-    std::vector<double> values;  // this rank's block of rows
-  };
-  Output::TermStates states;
-  std::vector<Block> blocks;
-  std::vector<long long> gid(rows);
-  collectively(comm, [&] {
-    QuietHdf5 quiet;
-    H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
-    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());
-    if (fid < 0) fail("is not a readable HDF5 file");
-    H5 file(fid, H5Fclose, "open " + path);
-    auto read = [&](const std::string& name, hid_t type, long long first, long long count, int cols, void* out) {
-      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
-      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-      hsize_t start[2] = {static_cast<hsize_t>(first), 0}, cnt[2] = {static_cast<hsize_t>(count), static_cast<hsize_t>(cols)};
-      H5 mem(H5Screate_simple(cols == 1 ? 1 : 2, cnt, nullptr), H5Sclose, "memspace");
-      if (count > 0) {
-        H5Sselect_hyperslab(sp.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
-      } else {
-        H5Sselect_none(sp.id());
-        H5Sselect_none(mem.id());
-      }
-      if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail("cannot read " + name);
-    };
-    auto extent = [&](const std::string& name, hsize_t dims[2]) {
-      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
-      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-      dims[1] = 1;
-      return H5Sget_simple_extent_dims(sp.id(), dims, nullptr);
-    };
-    if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
-      read("/node_gid", H5T_NATIVE_LLONG, r0, rows, 1, gid.data());
-    } else {
-      for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;
-    }
-    for (const auto& term : sys.terms()) {
-      const std::string group = std::string("/term ") + term->name();
-      if (H5Lexists(file.id(), group.c_str(), H5P_DEFAULT) <= 0) continue;
-      H5 g(H5Gopen2(file.id(), group.c_str(), H5P_DEFAULT), H5Gclose, path + ": " + group);
-      H5G_info_t info;
-      if (H5Gget_info(g.id(), &info) < 0) fail("cannot list " + group);
-      TermState state;
-      for (hsize_t k = 0; k < info.nlinks; ++k) {
-        char buf[256] = {0};
-        if (H5Lget_name_by_idx(g.id(), ".", H5_INDEX_NAME, H5_ITER_INC, k, buf, sizeof buf, H5P_DEFAULT) < 0) fail("cannot list " + group);
-        const std::string item = buf, dataset = group + "/" + item;
-        hsize_t dims[2] = {0, 1};
-        const int ndims = extent(dataset, dims);
-        if (item.rfind("shared ", 0) == 0) {
-          std::vector<double> record(dims[0]);
-          if (ndims != 1 || dims[0] < 1) fail(dataset + " is not a record (corrupt file?)");
-          read(dataset, H5T_NATIVE_DOUBLE, 0, static_cast<long long>(dims[0]), 1, record.data());
-          if (record[0] != static_cast<double>(dims[0] - 1)) fail(dataset + " does not hold its length (corrupt file?)");
-          state.shared.emplace_back(item.substr(7), std::vector<double>(record.begin() + 1, record.end()));
-        } else if (item.rfind("nodal ", 0) == 0) {
-          if (dims[0] != static_cast<hsize_t>(N)) fail(dataset + " does not have a row per node of this mesh");
-          Block b{term->name(), item.substr(6), static_cast<int>(dims[1]), std::vector<double>(rows * dims[1])};
-          read(dataset, H5T_NATIVE_DOUBLE, r0, rows, b.components, b.values.data());
-          blocks.push_back(std::move(b));
-        }
-      }
-      states.emplace_back(term->name(), std::move(state));
-    }
-  });
-  // Nodal rows to the ranks owning their nodes (the same blocks, in the same order, on every rank).
-  if (blocks.empty()) return states;
-  std::vector<GO> gids(gid.begin(), gid.end());
-  const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                                              Teuchos::ArrayView<const GO>(gids), 0, sys.comm()));
-  const Import import(block_map, sys.owned_nodes());
-  for (Block& b : blocks) {
-    MultiVector from(block_map, b.components), to(sys.owned_nodes(), b.components);
-    {
-      auto v = from.getLocalViewHost(Tpetra::Access::OverwriteAll);
-      for (long long r = 0; r < rows; ++r)
-        for (int c = 0; c < b.components; ++c) v(r, c) = b.values[r * b.components + c];
-    }
-    to.doImport(from, import, Tpetra::INSERT);
-    TermState::Nodal nodal{b.key, b.components, std::vector<double>(m.n_owned_nodes * b.components)};
-    auto v = to.getLocalViewHost(Tpetra::Access::ReadOnly);
-    for (std::size_t n = 0; n < m.n_owned_nodes; ++n)
-      for (int c = 0; c < b.components; ++c) nodal.values[n * b.components + c] = v(n, c);
-    for (auto& [name, state] : states)
-      if (name == b.term) state.nodal.push_back(std::move(nodal));
-  }
-  return states;
-}
-
 }  // namespace
 
 Output::Output(const OutputParameters& params, const System& system, const std::string& name, int steps,
@@ -788,6 +686,234 @@ void Output::write_checkpoint(const LoadState& at, const Vector& u, const Vector
   });
 }
 
+namespace {
+
+// A checkpoint file opened by one rank (no collective open), with its scalar attributes checked.
+class CheckpointFile {
+ public:
+  CheckpointFile(const std::string& path, std::function<void(const std::string&)> fail) : path_(path), fail_(std::move(fail)) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) fail_("does not exist");
+    if (!fs::is_regular_file(path, ec)) fail_("is not a regular file");
+    if (H5Fis_hdf5(path.c_str()) <= 0) fail_("is not an HDF5 file");
+    H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
+    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());
+    if (fid < 0) fail_("is not a readable HDF5 file");
+    file_ = std::make_unique<H5>(fid, H5Fclose, "open " + path);
+  }
+  hid_t id() const { return file_->id(); }
+  bool has_attribute(const char* name) const { return H5Aexists(id(), name) > 0; }
+  bool has(const char* dataset) const { return H5Lexists(id(), dataset, H5P_DEFAULT) > 0; }
+  // A scalar attribute within [lo, hi].
+  double attribute(const char* name, double lo, double hi) const {
+    if (!has_attribute(name)) fail_(std::string("has no '") + name + "' attribute (not a Sinew checkpoint?)");
+    H5 a(H5Aopen(id(), name, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
+    H5 space(H5Aget_space(a.id()), H5Sclose, "attribute space");
+    if (H5Sget_simple_extent_npoints(space.id()) != 1) fail_(std::string("attribute '") + name + "' is not a scalar");
+    double v = NAN;
+    if (H5Aread(a.id(), H5T_NATIVE_DOUBLE, &v) < 0) fail_(std::string("cannot read attribute '") + name + "'");
+    if (!std::isfinite(v) || v < lo || v > hi)
+      fail_(std::string("attribute '") + name + "' = " + std::to_string(v) + " is out of range (corrupt file?)");
+    return v;
+  }
+  // Rows [first, first + count) of a rows x cols dataset.
+  void read_rows(const char* name, hid_t type, long long first, long long count, int cols, void* out) const {
+    H5 d(H5Dopen2(id(), name, H5P_DEFAULT), H5Dclose, path_ + ": " + name);
+    H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+    hsize_t start[2] = {static_cast<hsize_t>(first), 0}, cnt[2] = {static_cast<hsize_t>(count), static_cast<hsize_t>(cols)};
+    H5 mem(H5Screate_simple(cols == 1 ? 1 : 2, cnt, nullptr), H5Sclose, "memspace");
+    if (count > 0) {
+      H5Sselect_hyperslab(sp.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+    } else {
+      H5Sselect_none(sp.id());
+      H5Sselect_none(mem.id());
+    }
+    if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail_(std::string("cannot read ") + name);
+  }
+  void fail(const std::string& why) const { fail_(why); }
+
+ private:
+  std::string path_;
+  std::function<void(const std::string&)> fail_;
+  std::unique_ptr<H5> file_;
+};
+
+// The same physics: a checkpoint of another material, load or mesh would continue a different problem
+// from a state that is not its own (checkpoints written before digests were kept pass). Returns the
+// notes on entries new since the checkpoint (taken at their defaults); fails naming what differs.
+std::vector<std::string> check_physics(const CheckpointFile& file, const Output::Physics& physics) {
+  std::vector<std::string> notes, changed, details;
+  for (const auto& section : physics) {
+    const std::string name = "physics " + section.name;
+    if (!file.has_attribute(name.c_str())) continue;
+    H5 a(H5Aopen(file.id(), name.c_str(), H5P_DEFAULT), H5Aclose, "attribute " + name);
+    H5 type(H5Aget_type(a.id()), H5Tclose, "attribute type");
+    std::string stored(H5Tget_size(type.id()), '\0');
+    if (H5Tget_class(type.id()) != H5T_STRING || H5Aread(a.id(), type.id(), stored.data()) < 0)
+      file.fail("cannot read attribute '" + name + "' (corrupt file?)");
+    stored.erase(std::find(stored.begin(), stored.end(), '\0'), stored.end());
+    if (stored == section.fingerprint.digest) continue;
+    // Checkpoints written before the entries were kept have the digest only.
+    const std::string dataset = "/" + name;
+    if (!file.has(dataset.c_str())) {
+      changed.push_back("'" + section.name + "'");
+      continue;
+    }
+    std::vector<SectionEntry> entries;
+    try {
+      entries = decode_entries(read_text(file.id(), dataset));
+    } catch (const std::exception& e) {
+      file.fail("cannot read '" + dataset + "' (corrupt file?): " + e.what());
+    }
+    const EntryDifference d = compare_entries(entries, section.fingerprint.entries, section.name + "/");
+    for (const auto& e : d.new_at_default) notes.push_back(e + " is new since the checkpoint was written; taken at its default");
+    if (d.differ.empty()) continue;
+    changed.push_back("'" + section.name + "'");
+    details.insert(details.end(), d.differ.begin(), d.differ.end());
+  }
+  if (!changed.empty()) {
+    std::string listed;
+    const std::size_t shown = std::min<std::size_t>(details.size(), 8);
+    for (std::size_t k = 0; k < shown; ++k) listed += (k ? "; " : " (") + details[k];
+    if (details.size() > shown) listed += "; and " + std::to_string(details.size() - shown) + " more";
+    if (shown) listed += ")";
+    file.fail("was written by a run whose " + or_list(changed) + " section" + (changed.size() > 1 ? "s differ" : " differs") +
+              " from this scene's" + listed + "; a restart continues the same physics (sinew --restart-anyway FILE "
+              "continues it with this scene's)");
+  }
+  return notes;
+}
+
+// Where the load path stood: step, load, the cut increment and its cuts, the previous load.
+void read_load_state(const CheckpointFile& file, int steps, bool want_previous, LoadState& c) {
+  const double step = file.attribute("step", 0, steps);
+  c.step = static_cast<int>(step);
+  if (c.step != step) file.fail("attribute 'step' is not a whole number (corrupt file?)");
+  c.load = file.attribute("load", 0.0, 1.0);
+  // Checkpoints written before cut steps were recorded lack these: they were taken at step ends.
+  c.increment = file.has_attribute("increment") ? file.attribute("increment", 0.0, 1.0) : 0.0;
+  c.cuts = file.has_attribute("cuts") ? static_cast<int>(file.attribute("cuts", 0, 64)) : 0;
+  if (c.load < static_cast<double>(c.step) / steps - 1e-12 || c.load > static_cast<double>(c.step + 1) / steps + 1e-12)
+    file.fail("load " + std::to_string(c.load) + " does not lie within step " + std::to_string(c.step + 1) + " (corrupt file?)");
+  // Written by runs with the extrapolating predictor; without it the next step starts unextrapolated.
+  if (want_previous && file.has_attribute("previous_load")) c.previous_load = file.attribute("previous_load", 0.0, c.load);
+}
+
+// A nodes x 3 field of the checkpoint: this rank's block of rows, then its owners' copy.
+struct NodeField {
+  const char* name;
+  Vector* out;
+  std::vector<double> values;
+};
+
+void read_node_field(const CheckpointFile& file, long long global_nodes, long long r0, long long rows, NodeField& f) {
+  if (!file.has(f.name)) file.fail(std::string("has no ") + f.name + " dataset");
+  {
+    H5 d(H5Dopen2(file.id(), f.name, H5P_DEFAULT), H5Dclose, std::string(f.name));
+    H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+    hsize_t dims[2] = {0, 0};
+    if (H5Sget_simple_extent_ndims(sp.id()) != 2 || H5Sget_simple_extent_dims(sp.id(), dims, nullptr) != 2 ||
+        dims[0] != static_cast<hsize_t>(global_nodes) || dims[1] != 3)
+      file.fail(std::string(f.name) + " does not have the shape nodes x 3 of this mesh");
+  }
+  f.values.resize(3 * rows);
+  file.read_rows(f.name, H5T_NATIVE_DOUBLE, r0, rows, 3, f.values.data());
+  for (long long i = 0; i < 3 * rows; ++i)
+    if (!std::isfinite(f.values[i]))
+      file.fail(std::string(f.name) + " row " + std::to_string(r0 + i / 3) + " holds a non-finite value (corrupt file?)");
+}
+
+// Reads the states of the system's terms from a checkpoint (collective; a term the file has no group
+// for is left out). Each rank reads its block of nodal rows and a Tpetra import takes them to the
+// ranks owning their nodes.
+Output::TermStates read_term_states(const std::string& path, const System& sys) {
+  const Mesh& m = sys.mesh();
+  MPI_Comm comm = raw_comm(*sys.comm());
+  int rank = 0, P = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &P);
+  const long long N = m.global_nodes, r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
+  auto fail = [&](const std::string& why) { throw InputError("restart file '" + path + "': " + why, InputErrorKind::File); };
+  struct Block {
+    std::string term, key;
+    int components;
+    std::vector<double> values;  // this rank's block of rows
+  };
+  Output::TermStates states;
+  std::vector<Block> blocks;
+  std::vector<long long> gid(rows);
+  collectively(comm, [&] {
+    QuietHdf5 quiet;
+    const CheckpointFile file(path, fail);
+    auto read = [&](const std::string& name, hid_t type, long long first, long long count, int cols, void* out) {
+      file.read_rows(name.c_str(), type, first, count, cols, out);
+    };
+    auto extent = [&](const std::string& name, hsize_t dims[2]) {
+      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
+      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+      dims[1] = 1;
+      return H5Sget_simple_extent_dims(sp.id(), dims, nullptr);
+    };
+    if (file.has("/node_gid")) {
+      read("/node_gid", H5T_NATIVE_LLONG, r0, rows, 1, gid.data());
+    } else {
+      for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;
+    }
+    for (const auto& term : sys.terms()) {
+      const std::string group = std::string("/term ") + term->name();
+      if (!file.has(group.c_str())) continue;
+      H5 g(H5Gopen2(file.id(), group.c_str(), H5P_DEFAULT), H5Gclose, path + ": " + group);
+      H5G_info_t info;
+      if (H5Gget_info(g.id(), &info) < 0) fail("cannot list " + group);
+      TermState state;
+      for (hsize_t k = 0; k < info.nlinks; ++k) {
+        char buf[256] = {0};
+        if (H5Lget_name_by_idx(g.id(), ".", H5_INDEX_NAME, H5_ITER_INC, k, buf, sizeof buf, H5P_DEFAULT) < 0) fail("cannot list " + group);
+        const std::string item = buf, dataset = group + "/" + item;
+        hsize_t dims[2] = {0, 1};
+        const int ndims = extent(dataset, dims);
+        if (item.rfind("shared ", 0) == 0) {
+          std::vector<double> record(dims[0]);
+          if (ndims != 1 || dims[0] < 1) fail(dataset + " is not a record (corrupt file?)");
+          read(dataset, H5T_NATIVE_DOUBLE, 0, static_cast<long long>(dims[0]), 1, record.data());
+          if (record[0] != static_cast<double>(dims[0] - 1)) fail(dataset + " does not hold its length (corrupt file?)");
+          state.shared.emplace_back(item.substr(7), std::vector<double>(record.begin() + 1, record.end()));
+        } else if (item.rfind("nodal ", 0) == 0) {
+          if (dims[0] != static_cast<hsize_t>(N)) fail(dataset + " does not have a row per node of this mesh");
+          Block b{term->name(), item.substr(6), static_cast<int>(dims[1]), std::vector<double>(rows * dims[1])};
+          read(dataset, H5T_NATIVE_DOUBLE, r0, rows, b.components, b.values.data());
+          blocks.push_back(std::move(b));
+        }
+      }
+      states.emplace_back(term->name(), std::move(state));
+    }
+  });
+  // Nodal rows to the ranks owning their nodes (the same blocks, in the same order, on every rank).
+  if (blocks.empty()) return states;
+  std::vector<GO> gids(gid.begin(), gid.end());
+  const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
+                                              Teuchos::ArrayView<const GO>(gids), 0, sys.comm()));
+  const Import import(block_map, sys.owned_nodes());
+  for (Block& b : blocks) {
+    MultiVector from(block_map, b.components), to(sys.owned_nodes(), b.components);
+    {
+      auto v = from.getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (long long r = 0; r < rows; ++r)
+        for (int c = 0; c < b.components; ++c) v(r, c) = b.values[r * b.components + c];
+    }
+    to.doImport(from, import, Tpetra::INSERT);
+    TermState::Nodal nodal{b.key, b.components, std::vector<double>(m.n_owned_nodes * b.components)};
+    auto v = to.getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t n = 0; n < m.n_owned_nodes; ++n)
+      for (int c = 0; c < b.components; ++c) nodal.values[n * b.components + c] = v(n, c);
+    for (auto& [name, state] : states)
+      if (name == b.term) state.nodal.push_back(std::move(nodal));
+  }
+  return states;
+}
+
+}  // namespace
+
 LoadState Output::read_checkpoint(const std::string& path, const System& sys, int steps, Vector& u,
                                   Vector* previous, Vector* velocity, const Physics* physics, TermStates* terms) {
   const Mesh& m = sys.mesh();
@@ -805,140 +931,33 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
   const long long N = m.global_nodes;
   const long long r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
   std::vector<long long> gid(rows);
-  struct Field {
-    const char* name;
-    Vector* out;
-    std::vector<double> values;
-  };
-  std::vector<Field> fields{{"/displacement", &u, {}}};
+  std::vector<NodeField> fields{{"/displacement", &u, {}}};
   collectively(comm, [&] {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) fail("does not exist");
-    if (!fs::is_regular_file(path, ec)) fail("is not a regular file");
     QuietHdf5 quiet;
-    if (H5Fis_hdf5(path.c_str()) <= 0) fail("is not an HDF5 file");
-    H5 fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "file access properties");
-    const hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.id());  // each rank on its own: no collective open
-    if (fid < 0) fail("is not a readable HDF5 file");
-    H5 file(fid, H5Fclose, "open " + path);
-    auto attribute = [&](const char* name, double lo, double hi) {
-      if (H5Aexists(file.id(), name) <= 0) fail(std::string("has no '") + name + "' attribute (not a Sinew checkpoint?)");
-      H5 a(H5Aopen(file.id(), name, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-      H5 space(H5Aget_space(a.id()), H5Sclose, "attribute space");
-      if (H5Sget_simple_extent_npoints(space.id()) != 1) fail(std::string("attribute '") + name + "' is not a scalar");
-      double v = NAN;
-      if (H5Aread(a.id(), H5T_NATIVE_DOUBLE, &v) < 0) fail(std::string("cannot read attribute '") + name + "'");
-      if (!std::isfinite(v) || v < lo || v > hi)
-        fail(std::string("attribute '") + name + "' = " + std::to_string(v) + " is out of range (corrupt file?)");
-      return v;
-    };
-    const long long nodes = static_cast<long long>(attribute("global_nodes", 0, 1e15));
+    const CheckpointFile file(path, fail);
+    const long long nodes = static_cast<long long>(file.attribute("global_nodes", 0, 1e15));
     if (nodes != m.global_nodes)
       fail("was written for a mesh of " + std::to_string(nodes) + " nodes; this scene has " + std::to_string(m.global_nodes));
-    const int file_steps = static_cast<int>(attribute("steps", 1, 1e9));
+    const int file_steps = static_cast<int>(file.attribute("steps", 1, 1e9));
     if (file_steps != steps)
       fail("was written for " + std::to_string(file_steps) + " load steps; this scene has " + std::to_string(steps));
-    // The same physics: a checkpoint of another material, load or mesh would continue a different
-    // problem from a state that is not its own (checkpoints written before digests were kept pass).
-    if (physics) {
-      std::vector<std::string> changed, details;
-      for (const auto& section : *physics) {
-        const std::string name = "physics " + section.name;
-        if (H5Aexists(file.id(), name.c_str()) <= 0) continue;
-        H5 a(H5Aopen(file.id(), name.c_str(), H5P_DEFAULT), H5Aclose, "attribute " + name);
-        H5 type(H5Aget_type(a.id()), H5Tclose, "attribute type");
-        std::string stored(H5Tget_size(type.id()), '\0');
-        if (H5Tget_class(type.id()) != H5T_STRING || H5Aread(a.id(), type.id(), stored.data()) < 0)
-          fail("cannot read attribute '" + name + "' (corrupt file?)");
-        stored.erase(std::find(stored.begin(), stored.end(), '\0'), stored.end());
-        if (stored == section.fingerprint.digest) continue;
-        // Checkpoints written before the entries were kept have the digest only.
-        const std::string dataset = "/" + name;
-        if (H5Lexists(file.id(), dataset.c_str(), H5P_DEFAULT) <= 0) {
-          changed.push_back("'" + section.name + "'");
-          continue;
-        }
-        std::vector<SectionEntry> entries;
-        try {
-          entries = decode_entries(read_text(file.id(), dataset));
-        } catch (const std::exception& e) {
-          fail("cannot read '" + dataset + "' (corrupt file?): " + e.what());
-        }
-        const EntryDifference d = compare_entries(entries, section.fingerprint.entries, section.name + "/");
-        for (const auto& e : d.new_at_default) c.notes.push_back(e + " is new since the checkpoint was written; taken at its default");
-        if (d.differ.empty()) continue;
-        changed.push_back("'" + section.name + "'");
-        details.insert(details.end(), d.differ.begin(), d.differ.end());
-      }
-      if (!changed.empty()) {
-        std::string listed;
-        const std::size_t shown = std::min<std::size_t>(details.size(), 8);
-        for (std::size_t k = 0; k < shown; ++k) listed += (k ? "; " : " (") + details[k];
-        if (details.size() > shown) listed += "; and " + std::to_string(details.size() - shown) + " more";
-        if (shown) listed += ")";
-        fail("was written by a run whose " + or_list(changed) + " section" + (changed.size() > 1 ? "s differ" : " differs") +
-             " from this scene's" + listed + "; a restart continues the same physics (sinew --restart-anyway FILE "
-             "continues it with this scene's)");
-      }
-    }
-    const double step = attribute("step", 0, steps);
-    c.step = static_cast<int>(step);
-    if (c.step != step) fail("attribute 'step' is not a whole number (corrupt file?)");
-    c.load = attribute("load", 0.0, 1.0);
-    // Checkpoints written before cut steps were recorded lack these: they were taken at step ends.
-    c.increment = H5Aexists(file.id(), "increment") > 0 ? attribute("increment", 0.0, 1.0) : 0.0;
-    c.cuts = H5Aexists(file.id(), "cuts") > 0 ? static_cast<int>(attribute("cuts", 0, 64)) : 0;
-    if (c.load < static_cast<double>(c.step) / steps - 1e-12 || c.load > static_cast<double>(c.step + 1) / steps + 1e-12)
-      fail("load " + std::to_string(c.load) + " does not lie within step " + std::to_string(c.step + 1) + " (corrupt file?)");
-    // Written by runs with the extrapolating predictor; without it the next step starts unextrapolated.
-    if (previous && H5Aexists(file.id(), "previous_load") > 0) {
-      c.previous_load = attribute("previous_load", 0.0, c.load);
-      fields.push_back({"/previous_displacement", previous, {}});
-    }
+    if (physics) c.notes = check_physics(file, *physics);
+    read_load_state(file, steps, previous != nullptr, c);
+    if (previous && c.previous_load >= 0.0) fields.push_back({"/previous_displacement", previous, {}});
     if (velocity) {
-      if (H5Lexists(file.id(), "/velocity", H5P_DEFAULT) <= 0)
-        fail("has no /velocity: it was written by a quasi-static run, and this scene is dynamic");
+      if (!file.has("/velocity")) fail("has no /velocity: it was written by a quasi-static run, and this scene is dynamic");
       fields.push_back({"/velocity", velocity, {}});
     }
     // Each rank reads a block of rows, whatever the layout that wrote them.
-    auto read_block = [&](const char* name, hid_t type, int cols, void* out) {
-      H5 d(H5Dopen2(file.id(), name, H5P_DEFAULT), H5Dclose, path + ": " + name);
-      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-      hsize_t start[2] = {static_cast<hsize_t>(r0), 0}, cnt[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
-      H5 mem(H5Screate_simple(cols == 1 ? 1 : 2, cnt, nullptr), H5Sclose, "memspace");
-      if (rows > 0) {
-        H5Sselect_hyperslab(sp.id(), H5S_SELECT_SET, start, nullptr, cnt, nullptr);
-      } else {
-        H5Sselect_none(sp.id());
-        H5Sselect_none(mem.id());
-      }
-      if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail(std::string("cannot read ") + name);
-    };
-    if (H5Lexists(file.id(), "/node_gid", H5P_DEFAULT) > 0) {
-      read_block("/node_gid", H5T_NATIVE_LLONG, 1, gid.data());
+    if (file.has("/node_gid")) {
+      file.read_rows("/node_gid", H5T_NATIVE_LLONG, r0, rows, 1, gid.data());
       for (long long k = 0; k < rows; ++k)
         if (gid[k] < 0 || gid[k] >= N)
-          fail("/node_gid row " + std::to_string(r0 + k) + " holds " + std::to_string(gid[k]) +
-               ", not a node of this mesh (corrupt file?)");
+          fail("/node_gid row " + std::to_string(r0 + k) + " holds " + std::to_string(gid[k]) + ", not a node of this mesh (corrupt file?)");
     } else {
       for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;  // written before /node_gid existed: rows were ids
     }
-    for (Field& f : fields) {
-      if (H5Lexists(file.id(), f.name, H5P_DEFAULT) <= 0) fail(std::string("has no ") + f.name + " dataset");
-      {
-        H5 d(H5Dopen2(file.id(), f.name, H5P_DEFAULT), H5Dclose, path + ": " + f.name);
-        H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-        hsize_t dims[2] = {0, 0};
-        if (H5Sget_simple_extent_ndims(sp.id()) != 2 || H5Sget_simple_extent_dims(sp.id(), dims, nullptr) != 2 ||
-            dims[0] != static_cast<hsize_t>(m.global_nodes) || dims[1] != 3)
-          fail(std::string(f.name) + " does not have the shape nodes x 3 of this mesh");
-      }
-      f.values.resize(3 * rows);
-      read_block(f.name, H5T_NATIVE_DOUBLE, 3, f.values.data());
-      for (long long i = 0; i < 3 * rows; ++i)
-        if (!std::isfinite(f.values[i]))
-          fail(std::string(f.name) + " row " + std::to_string(r0 + i / 3) + " holds a non-finite value (corrupt file?)");
-    }
+    for (NodeField& f : fields) read_node_field(file, N, r0, rows, f);
   });
   // The rows go to the ranks owning their nodes (a Tpetra import by global id).
   std::vector<GO> dofs(3 * rows);
@@ -947,7 +966,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
   const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
                                               Teuchos::ArrayView<const GO>(dofs), 0, sys.comm()));
   const Import import(block_map, u.getMap());
-  for (Field& f : fields) {
+  for (NodeField& f : fields) {
     Vector block(block_map);
     {
       auto bv = block.getLocalViewHost(Tpetra::Access::OverwriteAll);
@@ -957,7 +976,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
     f.out->doImport(block, import, Tpetra::INSERT);
   }
   collectively(comm, [&] {
-    for (const Field& f : fields) {
+    for (const NodeField& f : fields) {
       auto ov = f.out->getLocalViewHost(Tpetra::Access::ReadOnly);
       for (std::size_t i = 0; i < ov.extent(0); ++i)
         if (!std::isfinite(ov(i, 0)))

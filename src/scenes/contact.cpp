@@ -1,5 +1,7 @@
 // Colliders of a scene: shapes and their motions (scenes/contact.hpp).
+#include <sinew/algebra/system.hpp>
 #include <sinew/core/collective.hpp>
+#include <sinew/core/parameters.hpp>
 #include <sinew/scenes/contact.hpp>
 
 #include <memory>
@@ -49,6 +51,22 @@ Colliders::Colliders(const ContactParameters& p, const Skeleton& skeleton, const
 
 Rigid Colliders::pose(std::size_t k, double t) const {
   return bone_[k] >= 0 ? skeleton_.transform(static_cast<std::size_t>(bone_[k]), t) : tracks_[k].pose(t);
+}
+
+std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system, const Colliders& colliders) {
+  const double h = system.cell_size();
+  ContactSettings cs;
+  cs.self = p.self;
+  cs.stiffness = p.stiffness > 0.0 ? p.stiffness : 10.0 * system.stiffness_scale() / h;
+  cs.thickness = p.thickness > 0.0 ? p.thickness : 0.05 * h;
+  cs.margin = p.margin > 0.0 ? p.margin : cs.thickness + 0.5 * h;
+  if (!(cs.margin > cs.thickness))
+    throw InputError("Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" + format_number(cs.thickness) + ")");
+  cs.refine = p.refine;
+  cs.rounds = p.rounds;
+  auto term = std::make_shared<ContactTerm>(system, cs, colliders.shapes());
+  term->set_pose_source([c = &colliders](std::size_t k, double t) { return c->pose(k, t); });
+  return term;
 }
 
 }  // namespace sinew

@@ -58,34 +58,47 @@ Displacement motion_of(const BoundaryConditionParameters& p) {
 Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> comm)
     : name_(d.name), loading_(d.loading), time_(d.time) {
   const std::string file = d.file + ": ";
-  try {
-    MaterialAssignment materials{d.material.law.spec(), {}};
-    for (const auto& [region, law] : d.material.regions) materials.regions.emplace_back(region, law.spec());
-    system_ = std::make_unique<System>(comm, build_scene_mesh(d.mesh, *comm), materials);
-  } catch (const InputError& e) {
-    throw e.prefixed(file);
-  }
-  const Mesh& mesh = system_->mesh();
-  X_ = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
-
-  for (const auto& [bname, p] : loading_.conditions) {
-    const std::string where = "Loading/Boundary conditions/" + bname;
-    BoundaryCondition bc;
-    bc.name = bname;
-    for (int c = 0; c < 3; ++c) bc.prescribed[c] = p.components.find(static_cast<char>('x' + c)) != std::string::npos;
+  // Each step names the file in its input errors.
+  auto step = [&](auto&& fn) {
     try {
-      bc.nodes = select_region(mesh, *comm, p.region, where);
+      fn();
     } catch (const InputError& e) {
       throw e.prefixed(file);
     }
+  };
+  step([&] { build_system(d, comm); });
+  X_ = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), system_->mesh().X);
+  step([&] { resolve_conditions(*comm); });
+  step([&] { add_bones(d.skeleton, *comm); });
+  step([&] { check_conditions(d, *comm); });
+  step([&] { add_contact(d.contact, *comm); });
+  // The registered terms the scene asks for (scenes/term_registry.hpp), after contact.
+  step([&] { d.terms.add_terms(TermContext{*system_, *comm, dynamic()}); });
+  fix_prescribed_dofs();
+  // Body force and gravity ramp with the load in a quasi-static run, and act in full from the start of
+  // a dynamic one.
+  system_->set_external_loads(loading_.body_force, loading_.gravity, !dynamic());
+}
+
+void Scene::build_system(const SceneDescription& d, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+  MaterialAssignment materials{d.material.law.spec(), {}};
+  for (const auto& [region, law] : d.material.regions) materials.regions.emplace_back(region, law.spec());
+  system_ = std::make_unique<System>(comm, build_scene_mesh(d.mesh, *comm), materials);
+}
+
+void Scene::resolve_conditions(const Teuchos::Comm<int>& comm) {
+  for (const auto& [bname, p] : loading_.conditions) {
+    BoundaryCondition bc;
+    bc.name = bname;
+    for (int c = 0; c < 3; ++c) bc.prescribed[c] = p.components.find(static_cast<char>('x' + c)) != std::string::npos;
+    bc.nodes = select_region(system_->mesh(), comm, p.region, "Loading/Boundary conditions/" + bname);
     bc.value = motion_of(p);
     bcs_.push_back(std::move(bc));
   }
-  try {
-    skeleton_ = std::make_unique<Skeleton>(d.skeleton, mesh, *comm, "Skeleton");
-  } catch (const InputError& e) {
-    throw e.prefixed(file);
-  }
+}
+
+void Scene::add_bones(const SkeletonParameters& p, const Teuchos::Comm<int>& comm) {
+  skeleton_ = std::make_unique<Skeleton>(p, system_->mesh(), comm, "Skeleton");
   for (std::size_t b = 0; b < skeleton_->size(); ++b) {
     BoundaryCondition bc;
     bc.name = "bone " + skeleton_->name(b);
@@ -97,10 +110,13 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
     };
     bcs_.push_back(std::move(bc));
   }
+}
 
+void Scene::check_conditions(const SceneDescription& d, const Teuchos::Comm<int>& comm) const {
   // Every condition must hold some node, and no component may be prescribed twice (two conditions
   // may share a node when they prescribe different components of it: rollers meeting at an edge).
   // Both checks are collective, so every rank agrees.
+  const Mesh& mesh = system_->mesh();
   std::vector<int> owner(3 * mesh.local_nodes(), -1);
   for (std::size_t k = 0; k < bcs_.size(); ++k) {
     const BoundaryCondition& bc = bcs_[k];
@@ -108,13 +124,13 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
     for (int nd : bc.nodes)
       if (static_cast<std::size_t>(nd) < mesh.n_owned_nodes) ++owned;
     long long total = 0;
-    Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
+    Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, owned, Teuchos::outArg(total));
     const bool bone = k >= loading_.conditions.size();
     const std::string where = bone ? "Skeleton/Bones/" + bc.name.substr(5) : "Loading/Boundary conditions/" + bc.name;
     if (total == 0) {
       const std::string region = bone ? d.skeleton.bones[k - loading_.conditions.size()].second.region.region
                                       : loading_.conditions[k].second.region.region;
-      throw InputError(file + where + ": region \"" + region + "\" selects no node", InputErrorKind::EmptyRegion);
+      throw InputError(where + ": region \"" + region + "\" selects no node", InputErrorKind::EmptyRegion);
     }
     int local_conflict = -1;
     for (int nd : bc.nodes)
@@ -125,54 +141,32 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
         o = static_cast<int>(k);
       }
     int conflict = -1;
-    Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, local_conflict, Teuchos::outArg(conflict));
+    Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, local_conflict, Teuchos::outArg(conflict));
     if (conflict >= 0)
-      throw InputError(file + where + ": its nodes overlap those of '" + bcs_[conflict].name + "'; a node cannot be both '" +
+      throw InputError(where + ": its nodes overlap those of '" + bcs_[conflict].name + "'; a node cannot be both '" +
                            bcs_[conflict].name + "' and '" + bc.name + "'",
                        InputErrorKind::ConflictingConditions);
   }
-  if (d.contact.active()) {
-    try {
-      colliders_ = std::make_unique<Colliders>(d.contact, *skeleton_, *comm, "Contact");
-    } catch (const InputError& e) {
-      throw e.prefixed(file);
-    }
-    // Automatic settings scale with the stiffest law and the mesh: a traction of (mu_L + lambda_L)
-    // pushes a surface point in by a tenth of a cell.
-    const double h = system_->cell_size();
-    ContactSettings cs;
-    cs.self = d.contact.self;
-    cs.stiffness = d.contact.stiffness > 0.0 ? d.contact.stiffness : 10.0 * system_->stiffness_scale() / h;
-    cs.thickness = d.contact.thickness > 0.0 ? d.contact.thickness : 0.05 * h;
-    cs.margin = d.contact.margin > 0.0 ? d.contact.margin : cs.thickness + 0.5 * h;
-    if (!(cs.margin > cs.thickness))
-      throw InputError(file + "Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" +
-                       format_number(cs.thickness) + ")");
-    cs.refine = d.contact.refine;
-    cs.rounds = d.contact.rounds;
-    contact_ = std::make_shared<ContactTerm>(*system_, cs, colliders_->shapes());
-    contact_->set_pose_source([c = colliders_.get()](std::size_t k, double t) { return c->pose(k, t); });
-    system_->add_term(contact_);
-  }
-  // The registered terms the scene asks for (scenes/term_registry.hpp), after contact.
-  try {
-    d.terms.add_terms(TermContext{*system_, *comm, dynamic()});
-  } catch (const InputError& e) {
-    throw e.prefixed(file);
-  }
+}
+
+void Scene::add_contact(const ContactParameters& p, const Teuchos::Comm<int>& comm) {
+  if (!p.active()) return;
+  colliders_ = std::make_unique<Colliders>(p, *skeleton_, comm, "Contact");
+  contact_ = make_contact_term(p, *system_, *colliders_);
+  system_->add_term(contact_);
+}
+
+void Scene::fix_prescribed_dofs() {
   std::vector<int> fixed;
-  free_.assign(mesh.n_owned_nodes, 1);
+  free_.assign(system_->mesh().n_owned_nodes, 1);
   for (const auto& bc : bcs_)
     for (int nd : bc.nodes)
       for (int c = 0; c < 3; ++c)
         if (bc.prescribed[c]) {
           fixed.push_back(3 * nd + c);
-          if (static_cast<std::size_t>(nd) < mesh.n_owned_nodes) free_[nd] = 0;
+          if (static_cast<std::size_t>(nd) < system_->mesh().n_owned_nodes) free_[nd] = 0;
         }
   system_->set_fixed_dofs(fixed);
-  // Body force and gravity ramp with the load in a quasi-static run, and act in full from the start of
-  // a dynamic one.
-  system_->set_external_loads(loading_.body_force, loading_.gravity, !dynamic());
 }
 
 void Scene::apply_load(double t, Vector& u) {

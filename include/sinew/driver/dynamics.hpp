@@ -9,26 +9,31 @@
 #pragma once
 
 #include <sinew/algebra/terms/inertia.hpp>
+#include <sinew/driver/stepper.hpp>
 #include <sinew/scenes/scene.hpp>
 
 namespace sinew {
 
-class Dynamics {
+class Dynamics final : public Stepper {
  public:
   // Adds the inertia term to the scene's system.
   explicit Dynamics(Scene& scene);
 
-  Vector& velocity() { return *v_; }
-  const Vector& velocity() const { return *v_; }
-  double time_of(double load) const { return load * end_time_; }
+  Vector* velocity() override { return v_.get(); }
+  double time_of(double load) const override { return load * end_time_; }
   // Collective: 1/2 v^T M v.
   double kinetic_energy() const { return inertia_->kinetic_energy(*v_); }
 
   // Sets up the step from load t0 to t1 at state u and writes the solve's first guess (with its
   // prescribed values) into trial. Leaves the scene's colliders and loads at the step's y.
-  void begin(double t0, double t1, const Vector& u, Vector& trial);
+  SolveReport begin(double t0, double t1, const Vector& u, Vector& trial) override;
   // After a converged solve for y: u and the velocity to the step's end.
-  void end(const Vector& y, Vector& u);
+  void end(double t0, double t1, const Vector& y, Vector& u) override;
+  std::string describe(double load) const override;
+  const char* cut_name() const override { return "time step"; }
+  // The time and kinetic energy at the step's end; the mechanical energy's line.
+  void record(StepRecord& rec) const override;
+  std::vector<std::string> summary(const StepRecord& rec) const override;
 
  private:
   Scene& scene_;

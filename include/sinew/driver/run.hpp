@@ -19,9 +19,9 @@ struct RunOptions {
 
 class Scene;
 class NonlinearSolver;
-class Dynamics;
+class Stepper;
 
-// One quasi-static run: the scene, its solver and output, and the load-step loop.
+// One run: the scene, its solver, its stepper (quasi-static or dynamic) and output, and the step loop.
 class Simulation {
  public:
   // Collective over comm (default: all ranks); throws InputError for bad input.
@@ -54,16 +54,15 @@ class Simulation {
   void print_header() const;
   // Advances the state through load step k, cutting the increment when a solve fails.
   StepOutcome advance(int k, StepRecord& rec);
-  // The first guess for load t (Dirichlet values set): u_ moved by the skinning predictor, or its
-  // linear extrapolation through u_previous_, or the tangent predictor from u_, whichever has the
-  // lowest (finite) energy. Returns the tangent predictor's solve (CG, times; nothing without it).
-  SolveReport first_guess(double t, Vector& trial);
-  // Solves for the state at load t from trial; with contact, rounds of detection (new pairs, raised
-  // tractions) and solve until a detection changes nothing (or the scene's maximum of solves).
+  // Solves for the state at load t from trial: rounds of the terms (System::round: contact's detection
+  // and tractions) and solves until no term asks for another.
   SolveReport solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
   void print_step(const StepRecord& rec) const;
-  // Collective: the step file of the current state, with the contact pressure when there is contact.
+  // Collective: the step file of the current state, with the terms' node fields and a velocity.
   void write_step(int step, double load);
+  // Collective: checkpoint.h5 of where the run stands (the state, the predictor's history, a velocity,
+  // the terms' states).
+  void checkpoint();
   void print_summary() const;
 
   SceneConfig config_;
@@ -71,7 +70,7 @@ class Simulation {
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<NonlinearSolver> solver_;
-  std::unique_ptr<Dynamics> dynamics_;  // a dynamic run's velocity and integrator
+  std::unique_ptr<Stepper> stepper_;  // load steps with predictors, or a time integrator
   std::unique_ptr<Output> out_;
   Teuchos::RCP<Vector> u_;
   Teuchos::RCP<Vector> u_previous_;  // the converged state before u_ (at at_.previous_load), for the predictor

@@ -121,4 +121,10 @@ class Colliders {
   std::vector<int> bone_;  // -1: keyframes
 };
 
+// The contact term of a scene (collective): ContactSettings from the section, automatic values scaled
+// with the stiffest law and the mesh (a traction of mu_L + lambda_L pushes a surface point in by a
+// tenth of a cell; thickness 0.05 h; margin thickness + h / 2), collider poses from `colliders` (which
+// must outlive the term). Throws InputError ("Contact: ...") for a margin not above the thickness.
+std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system, const Colliders& colliders);
+
 }  // namespace sinew

@@ -164,6 +164,15 @@ class Scene {
   bool self_contact() const { return contact_ && contact_->settings().self; }
 
  private:
+  // The construction's steps, in order (each throws InputError naming its entry; the constructor adds
+  // the file).
+  void build_system(const SceneDescription& d, const Teuchos::RCP<const Teuchos::Comm<int>>& comm);
+  void resolve_conditions(const Teuchos::Comm<int>& comm);
+  void add_bones(const SkeletonParameters& p, const Teuchos::Comm<int>& comm);
+  void check_conditions(const SceneDescription& d, const Teuchos::Comm<int>& comm) const;
+  void add_contact(const ContactParameters& p, const Teuchos::Comm<int>& comm);
+  void fix_prescribed_dofs();
+
   std::string name_;
   LoadingParameters loading_;
   TimeParameters time_;

@@ -4,6 +4,8 @@
 //   static constexpr const char* doc      one line for sinew --parameters
 //   static bool active(const Parameters&) whether the scene asked for the term
 //   static std::shared_ptr<EnergyTerm> make(const Parameters&, const TermContext&)
+//   static void resolve_paths(Parameters&, const std::function<void(std::string&)>&)   (optional: file
+//                                          names in the section, taken from the scene file's folder)
 // and TermKinds<K...> (term_registry.hpp lists them) holds their sections in a scene's parameters,
 // parses, checks, documents and fingerprints them with the rest (one visit), and adds the active terms
 // to the scene's system in the listed order. A new term is its own header and one line in the list.
@@ -13,6 +15,7 @@
 
 #include <Teuchos_Comm.hpp>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -39,6 +42,10 @@ struct TermKinds {
   }
   // Adds each active term to the context's system (collective).
   void add_terms(const TermContext& c) const { add_each(c, std::index_sequence_for<Kinds...>{}); }
+  // Relative file names in the sections, resolved by `resolve` (kinds that have any say so).
+  void resolve_paths(const std::function<void(std::string&)>& resolve) {
+    resolve_each(resolve, std::index_sequence_for<Kinds...>{});
+  }
   // The section names, in order (the checkpoint's physics list).
   static std::vector<std::string> sections() { return {Kinds::section...}; }
   // Each section's parameters with f(name, parameters).
@@ -48,6 +55,17 @@ struct TermKinds {
   }
 
  private:
+  template <class K>
+  static auto resolve_one(typename K::Parameters& p, const std::function<void(std::string&)>& r, int)
+      -> decltype(K::resolve_paths(p, r), void()) {
+    K::resolve_paths(p, r);
+  }
+  template <class K>
+  static void resolve_one(typename K::Parameters&, const std::function<void(std::string&)>&, long) {}
+  template <std::size_t... I>
+  void resolve_each(const std::function<void(std::string&)>& r, std::index_sequence<I...>) {
+    (resolve_one<Kinds>(std::get<I>(parameters), r, 0), ...);
+  }
   template <class V, std::size_t... I>
   void visit_each(V& v, std::index_sequence<I...>) {
     (v.section(Kinds::section, std::get<I>(parameters), Kinds::doc), ...);

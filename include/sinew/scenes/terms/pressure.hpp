@@ -108,6 +108,9 @@ struct PressureLoads {
   static constexpr const char* section = "Pressure";
   static constexpr const char* doc = "pressures and tractions on regions of the boundary surface (dead loads)";
   static bool active(const Parameters& p) { return !p.loads.empty(); }
+  static void resolve_paths(Parameters& p, const std::function<void(std::string&)>& resolve) {
+    for (auto& [name, load] : p.loads) resolve(load.region.surface);
+  }
 
   // Collective. Throws InputError naming the load whose region holds no boundary face (or is not one
   // of the mesh's groups).
