@@ -156,6 +156,49 @@ std::map<std::string, std::vector<Rigid>> read_motion_file(const std::string& pa
 
 void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm,
                               const std::string& where) {
+  const RigClip* rest_clip = read_rig_and_clip(p, comm, where);
+  const RigFile& rig = *rig_;
+  const std::vector<Affine> rest = rig.pose(rest_clip, p.rest_time);
+  if (source_) {
+    try {
+      retarget_ = std::make_unique<Retarget>(rig, rest, *source_, *clip_, clip_t0_, Retarget::parse_map(p.joint_map), p.retarget_scale);
+    } catch (const InputError& e) {
+      throw e.prefixed(where + ": ");
+    }
+  }
+  const JointSegments segments = joint_segments(rig, rest);
+  if (segments.joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
+  // The capsule radius: 1.5 cells unless given (the lattice is uniform: any element's edge).
+  double h = 0.0;
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto Ch = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  if (mesh.local_elements() > 0)
+    for (int d = 0; d < 3; ++d) h = std::max(h, std::fabs(Xh(Ch(0, 1), d) - Xh(Ch(0, 0), d)));
+  MPI_Allreduce(MPI_IN_PLACE, &h, 1, MPI_DOUBLE, MPI_MAX, raw_comm(comm));
+  const double radius = p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h;
+  std::vector<std::vector<int>> nodes = capsule_nodes(mesh, segments, radius);
+  std::vector<std::vector<Rigid>> frames = sample_frames(segments, rest, p.sample_rate);
+  // Joints whose capsule holds no node anywhere (a finger thinner than the cells) are no bones.
+  std::vector<long long> count(segments.joints.size());
+  for (std::size_t j = 0; j < segments.joints.size(); ++j)
+    for (int n : nodes[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
+  MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(count.size()), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
+  for (std::size_t j = 0; j < segments.joints.size(); ++j) {
+    if (count[j] == 0) {
+      ++unused_joints_;
+      continue;
+    }
+    Bone bone;
+    bone.name = rig.nodes[segments.joints[j]].name;
+    bone.frames = std::move(frames[j]);
+    bone.nodes = std::move(nodes[j]);
+    bones_.push_back(std::move(bone));
+  }
+  if (bones_.empty()) throw InputError(where + ": no joint of " + p.rig + " holds a lattice node within 'Bone radius' " + std::to_string(radius));
+  if (p.rig_weights) rig_weights_ = skin_weights(mesh, rest_clip, p.rest_time);
+}
+
+const RigClip* Skeleton::read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where) {
   auto file = std::make_shared<RigFile>();
   collectively(raw_comm(comm), [&] { *file = read_rig_file(p.rig); });
   rig_ = file;
@@ -185,44 +228,36 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     rest_clip = source_ ? rig.clip("") : clip;
     if (!rest_clip) throw InputError(where + ": 'Rest time' needs a clip in " + p.rig + ", which has none");
   }
-  const std::vector<Affine> rest = rig.pose(rest_clip, p.rest_time);
-  if (source_) {
-    try {
-      retarget_ = std::make_unique<Retarget>(rig, rest, *source_, *clip, t0, Retarget::parse_map(p.joint_map), p.retarget_scale);
-    } catch (const InputError& e) {
-      throw e.prefixed(where + ": ");
-    }
-  }
-  std::vector<int> joints;
-  std::vector<std::array<double, 3>> a, b;
+  return rest_clip;
+}
+
+Skeleton::JointSegments Skeleton::joint_segments(const RigFile& rig, const std::vector<Affine>& rest) {
+  // Each joint's segment at rest: from its origin to its first child joint's (a point for a leaf).
+  JointSegments s;
   for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
     if (!rig.nodes[n].joint) continue;
-    joints.push_back(static_cast<int>(n));
-    a.push_back(rest[n].t);
-    b.push_back(rest[n].t);
+    s.joints.push_back(static_cast<int>(n));
+    s.a.push_back(rest[n].t);
+    s.b.push_back(rest[n].t);
     for (std::size_t c = n + 1; c < rig.nodes.size(); ++c)
       if (rig.nodes[c].parent == static_cast<int>(n) && rig.nodes[c].joint) {
-        b.back() = rest[c].t;
+        s.b.back() = rest[c].t;
         break;
       }
   }
-  if (joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
-  // The capsule radius: 1.5 cells unless given (the lattice is uniform: any element's edge).
-  double h = 0.0;
-  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
-  auto Ch = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
-  if (mesh.local_elements() > 0)
-    for (int d = 0; d < 3; ++d) h = std::max(h, std::fabs(Xh(Ch(0, 1), d) - Xh(Ch(0, 0), d)));
-  MPI_Allreduce(MPI_IN_PLACE, &h, 1, MPI_DOUBLE, MPI_MAX, raw_comm(comm));
-  const double radius = p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h;
+  return s;
+}
+
+std::vector<std::vector<int>> Skeleton::capsule_nodes(const Mesh& mesh, const JointSegments& s, double radius) {
   // Nodes to the nearest capsule that holds them (production rigs' capsules overlap).
-  std::vector<std::vector<int>> nodes(joints.size());
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  std::vector<std::vector<int>> nodes(s.joints.size());
   for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
     const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
     int best = -1;
     double best_d = radius;
-    for (std::size_t j = 0; j < joints.size(); ++j) {
-      const double d = segment_distance(X, a[j], b[j]);
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      const double d = segment_distance(X, s.a[j], s.b[j]);
       if (d <= best_d) {
         best_d = d;
         best = static_cast<int>(j);
@@ -230,48 +265,41 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     }
     if (best >= 0) nodes[best].push_back(static_cast<int>(n));
   }
+  return nodes;
+}
+
+std::vector<std::vector<Rigid>> Skeleton::sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate) {
   // The clip sampled into frames over the load; each joint's motion from rest made rigid about its
   // origin (a production rig may scale or shear: the departure is kept for the run's header).
-  const int F = std::max(1, static_cast<int>(std::ceil((t1 - t0) * p.sample_rate)));
-  std::vector<std::vector<Rigid>> frames(joints.size());
+  const int F = std::max(1, static_cast<int>(std::ceil((clip_t1_ - clip_t0_) * sample_rate)));
+  std::vector<std::vector<Rigid>> frames(s.joints.size());
   for (int k = 0; k <= F; ++k) {
     const std::vector<Affine> W = rig_pose(static_cast<double>(k) / F);
-    for (std::size_t j = 0; j < joints.size(); ++j) {
-      const Affine D = W[joints[j]].after(rest[joints[j]].inverse());
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      const Affine D = W[s.joints[j]].after(rest[s.joints[j]].inverse());
       Rigid T;
       T.R = nearest_rotation(D.A);
       for (int q = 0; q < 9; ++q) nonrigid_ = std::max(nonrigid_, std::fabs(T.R[q] - D.A[q]));
-      const auto c = D.apply(a[j]);
-      for (int i = 0; i < 3; ++i) T.t[i] = c[i] - (T.R(i, 0) * a[j][0] + T.R(i, 1) * a[j][1] + T.R(i, 2) * a[j][2]);
+      const auto c = D.apply(s.a[j]);
+      for (int i = 0; i < 3; ++i) T.t[i] = c[i] - (T.R(i, 0) * s.a[j][0] + T.R(i, 1) * s.a[j][1] + T.R(i, 2) * s.a[j][2]);
       frames[j].push_back(T);
     }
   }
-  // Joints whose capsule holds no node anywhere (a finger thinner than the cells) are no bones.
-  std::vector<long long> count(joints.size());
-  for (std::size_t j = 0; j < joints.size(); ++j)
-    for (int n : nodes[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
-  MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(count.size()), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
-  for (std::size_t j = 0; j < joints.size(); ++j) {
-    if (count[j] == 0) {
-      ++unused_joints_;
-      continue;
-    }
-    Bone bone;
-    bone.name = rig.nodes[joints[j]].name;
-    bone.frames = std::move(frames[j]);
-    bone.nodes = std::move(nodes[j]);
-    bones_.push_back(std::move(bone));
-  }
-  if (bones_.empty()) throw InputError(where + ": no joint of " + p.rig + " holds a lattice node within 'Bone radius' " + std::to_string(radius));
-  if (!p.rig_weights) return;
+  return frames;
+}
+
+std::vector<std::vector<std::pair<int, double>>> Skeleton::skin_weights(const Mesh& mesh, const RigClip* rest_clip,
+                                                                         double rest_time) const {
   // The file's own skinning weights for the first guess: each owned node takes those of the nearest
   // skin vertex at rest, over the joints that became bones (renormalized; none left: distance weights).
+  const RigFile& rig = *rig_;
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
   std::vector<int> bone_of(rig.nodes.size(), -1);
   for (std::size_t k = 0; k < bones_.size(); ++k) bone_of[rig.node_index(bones_[k].name)] = static_cast<int>(k);
   std::vector<std::array<double, 3>> vx;
   std::vector<std::vector<std::pair<int, double>>> vw;
   for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
-    const auto x = rig.skin(static_cast<int>(m), rest_clip, p.rest_time);
+    const auto x = rig.skin(static_cast<int>(m), rest_clip, rest_time);
     std::vector<std::vector<std::pair<int, double>>> w(x.size());
     for (const auto& bone : rig.meshes[m].bones)
       if (bone_of[bone.node] >= 0)
@@ -279,7 +307,7 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     vx.insert(vx.end(), x.begin(), x.end());
     vw.insert(vw.end(), w.begin(), w.end());
   }
-  rig_weights_.assign(mesh.n_owned_nodes, {});
+  std::vector<std::vector<std::pair<int, double>>> weights(mesh.n_owned_nodes);
 #pragma omp parallel for schedule(dynamic, 64)
   for (long long n = 0; n < static_cast<long long>(mesh.n_owned_nodes); ++n) {
     double best = HUGE_VAL;
@@ -297,8 +325,9 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     for (const auto& bw : vw[at]) total += bw.second;
     auto w = vw[at];
     for (auto& bw : w) bw.second /= total;
-    rig_weights_[n] = std::move(w);
+    weights[n] = std::move(w);
   }
+  return weights;
 }
 
 std::vector<Affine> Skeleton::rig_pose(double load) const {

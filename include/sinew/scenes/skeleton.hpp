@@ -165,7 +165,19 @@ class Skeleton {
   double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
 
  private:
+  // A rig's joints as bones, in named steps: the file and its clip (returns the rest pose's clip, or
+  // null for the bind pose), each joint's segment at rest, the lattice nodes of each joint's capsule,
+  // the clip sampled into rigid frames, the file's skinning weights per owned node.
   void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
+  const RigClip* read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where);
+  struct JointSegments {
+    std::vector<int> joints;  // rig node indices
+    std::vector<std::array<double, 3>> a, b;
+  };
+  static JointSegments joint_segments(const RigFile& rig, const std::vector<Affine>& rest);
+  static std::vector<std::vector<int>> capsule_nodes(const Mesh& mesh, const JointSegments& s, double radius);
+  std::vector<std::vector<Rigid>> sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate);
+  std::vector<std::vector<std::pair<int, double>>> skin_weights(const Mesh& mesh, const RigClip* rest_clip, double rest_time) const;
   struct Bone {
     std::string name;
     int parent = -1;
