@@ -69,6 +69,16 @@ inline Obj read_obj(const std::string& path) {
   return o;
 }
 
+// A scene's Output section that writes no files but the logs (tests compare states in memory);
+// `extra` adds entries (a checkpoint).
+inline std::string logs_only_output(const std::string& extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x") {
+  return R"x(<ParameterList name="Output">
+    <Parameter name="HDF5" type="bool" value="false"/>
+    <Parameter name="Surface OBJ" type="bool" value="false"/>
+    )x" + extra + R"x(
+  </ParameterList>)x";
+}
+
 // A scene from XML text, its output sent to `out`.
 inline SceneConfig config(const std::string& xml, const std::string& out) {
   SceneConfig c = make_scene(read_parameter_text(xml, "test scene"), "test scene");

@@ -9,6 +9,8 @@
 
 #include <Teuchos_LAPACK.hpp>
 #include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_Vector.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -73,6 +75,25 @@ inline double max_abs(const std::vector<std::vector<double>>& A) {
   for (const auto& r : A)
     for (double x : r) m = std::max(m, std::fabs(x));
   return m;
+}
+
+// One term's Hessian alone at u (no Dirichlet elimination), as a dense matrix.
+inline std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u) {
+  auto K = sys.create_matrix();
+  Vector uc(sys.column_dofs());
+  uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
+  K->resumeFill();
+  K->setAllToScalar(0.0);
+  TermInput in;
+  auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
+  in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
+  in.want_matrix = true;
+  TermOutput out;
+  out.matrix = K->getLocalMatrixDevice();
+  out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
+  term.add(in, out);
+  K->fillComplete();
+  return dense(*K);
 }
 
 // Smallest eigenvalue of a dense symmetric matrix (LAPACK).

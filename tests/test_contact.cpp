@@ -54,25 +54,6 @@ std::vector<double> term_force(const System& sys, const EnergyTerm& term, const 
   return gather(*f);
 }
 
-// The term's Hessian alone, as a dense matrix.
-std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u) {
-  auto K = sys.create_matrix();
-  Vector uc(sys.column_dofs());
-  uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
-  K->resumeFill();
-  K->setAllToScalar(0.0);
-  TermInput in;
-  auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
-  in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
-  in.want_matrix = true;
-  TermOutput out;
-  out.matrix = K->getLocalMatrixDevice();
-  out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
-  term.add(in, out);
-  K->fillComplete();
-  return dense(*K);
-}
-
 // The upper block pushed down by `push` (into the lower one when push > 0.1) with a small wiggle.
 void press(const System& sys, Vector& u, double push) {
   set_displacement(sys, u, [&](const std::array<double, 3>& X, int c, long long gid) {
@@ -228,11 +209,7 @@ std::string pushed_block(const std::string& collider, double tol = 1e-9) {
   <ParameterList name="Solver">
     <Parameter name="Absolute tolerance" type="double" value=")x" + format_number(tol) + R"x("/>
   </ParameterList>
-  <ParameterList name="Output">
-    <Parameter name="HDF5" type="bool" value="false"/>
-    <Parameter name="Surface OBJ" type="bool" value="false"/>
-    <Parameter name="Checkpoint every" type="int" value="0"/>
-  </ParameterList>
+  )x" + logs_only_output() + R"x(
 </ParameterList>)x";
 }
 
@@ -328,11 +305,7 @@ std::string blocks_xml(double push, bool self, int steps = 4, const std::string&
   <ParameterList name="Solver">
     <Parameter name="Absolute tolerance" type="double" value="1.0e-9"/>
   </ParameterList>
-  <ParameterList name="Output">
-    <Parameter name="HDF5" type="bool" value="false"/>
-    <Parameter name="Surface OBJ" type="bool" value="false"/>
-    )x" + output_extra + R"x(
-  </ParameterList>
+  )x" + logs_only_output(output_extra) + R"x(
 </ParameterList>)x";
 }
 
