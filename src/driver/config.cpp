@@ -56,7 +56,6 @@ SceneConfig read_scene(const std::string& path) {
   resolve(c.params.skeleton.retarget);
   for (auto& [name, bc] : c.params.loading.conditions) resolve(bc.region.surface);
   for (auto& [name, bone] : c.params.skeleton.bones) resolve(bone.region.surface);
-  for (auto& [name, collider] : c.params.contact.colliders) resolve(collider.surface);
   c.params.terms.resolve_paths(resolve);
   return c;
 }
@@ -101,7 +100,7 @@ void check_mesh_file(const SceneConfig& c) {
     };
     for (const auto& [name, bc] : p.loading.conditions) surface(bc.region, "Loading/Boundary conditions/" + name);
     for (const auto& [name, bone] : p.skeleton.bones) surface(bone.region, "Skeleton/Bones/" + name);
-    for (const auto& [name, collider] : p.contact.colliders) {
+    for (const auto& [name, collider] : p.terms.of<Contact>().colliders) {
       if (collider.shape != ColliderParameters::Shape::Mesh) continue;
       try {
         read_triangle_surface(collider.surface);
@@ -110,7 +109,7 @@ void check_mesh_file(const SceneConfig& c) {
       }
     }
     // A collider attached to a bone needs that bone.
-    for (const auto& [name, collider] : p.contact.colliders)
+    for (const auto& [name, collider] : p.terms.of<Contact>().colliders)
       if (!collider.bone.empty() && p.skeleton.rig.empty() && std::none_of(p.skeleton.bones.begin(), p.skeleton.bones.end(),
                                                  [&](const auto& b) { return b.first == collider.bone; }))
         throw InputError("Contact/Colliders/" + name + ": 'Bone' \"" + collider.bone + "\" is not a bone of the Skeleton");
@@ -202,10 +201,11 @@ std::string describe(const SceneConfig& c) {
       os << "  " << name << ": " << b.region.region << (b.parent.empty() ? "" : ", child of " + b.parent) << ", "
          << b.keyframes.size() << " keyframes\n";
   }
-  if (p.contact.active()) {
-    os << "contact: self contact " << (p.contact.self ? "on" : "off") << ", " << p.contact.colliders.size() << " collider"
-       << (p.contact.colliders.size() == 1 ? "" : "s") << "\n";
-    for (const auto& [name, c] : p.contact.colliders) {
+  const ContactParameters& contact = p.terms.of<Contact>();
+  if (contact.active()) {
+    os << "contact: self contact " << (contact.self ? "on" : "off") << ", " << contact.colliders.size() << " collider"
+       << (contact.colliders.size() == 1 ? "" : "s") << "\n";
+    for (const auto& [name, c] : contact.colliders) {
       static const char* shapes[] = {"half-space", "sphere", "capsule", "cylinder", "mesh"};
       os << "  " << name << ": " << shapes[static_cast<int>(c.shape)]
          << (c.bone.empty() ? (c.keyframes.empty() ? ", fixed" : ", " + std::to_string(c.keyframes.size()) + " keyframes")

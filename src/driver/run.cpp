@@ -69,9 +69,11 @@ Simulation::Simulation(const SceneConfig& config, const RunOptions& options, Teu
     stepper_ = std::make_unique<QuasiStatic>(*scene_, *solver_, at_, *u_previous_, at_equilibrium_, talk_, config_.params.time.frame_rate);
   // The sections that define the problem solved (not Solver or Output, which a restart may change).
   const auto& p = config_.params;
-  Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},       {"Material", section_fingerprint(p.material)},
-                          {"Loading", section_fingerprint(p.loading)}, {"Skeleton", section_fingerprint(p.skeleton)},
-                          {"Contact", section_fingerprint(p.contact)}, {"Time", section_fingerprint(p.time)}};
+  Output::Physics physics{{"Mesh", section_fingerprint(p.mesh)},
+                          {"Material", section_fingerprint(p.material)},
+                          {"Loading", section_fingerprint(p.loading)},
+                          {"Skeleton", section_fingerprint(p.skeleton)},
+                          {"Time", section_fingerprint(p.time)}};
   p.terms.for_each([&](const char* section, const auto& params) { physics.push_back({section, section_fingerprint(params)}); });
   int restart_step = -1;
   if (!opt_.restart_file.empty()) {

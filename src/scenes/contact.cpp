@@ -53,7 +53,8 @@ Rigid Colliders::pose(std::size_t k, double t) const {
   return bone_[k] >= 0 ? skeleton_.transform(static_cast<std::size_t>(bone_[k]), t) : tracks_[k].pose(t);
 }
 
-std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system, const Colliders& colliders) {
+std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system,
+                                               std::shared_ptr<const Colliders> colliders) {
   const double h = system.cell_size();
   ContactSettings cs;
   cs.self = p.self;
@@ -64,9 +65,13 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
     throw InputError("Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" + format_number(cs.thickness) + ")");
   cs.refine = p.refine;
   cs.rounds = p.rounds;
-  auto term = std::make_shared<ContactTerm>(system, cs, colliders.shapes());
-  term->set_pose_source([c = &colliders](std::size_t k, double t) { return c->pose(k, t); });
+  auto term = std::make_shared<ContactTerm>(system, cs, colliders->shapes());
+  term->set_pose_source([colliders](std::size_t k, double t) { return colliders->pose(k, t); });
   return term;
+}
+
+std::shared_ptr<EnergyTerm> Contact::make(const Parameters& p, const TermContext& c) {
+  return make_contact_term(p, c.system, std::make_shared<const Colliders>(p, c.skeleton, c.comm, "Contact"));
 }
 
 }  // namespace sinew

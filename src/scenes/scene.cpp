@@ -71,9 +71,8 @@ Scene::Scene(const SceneDescription& d, Teuchos::RCP<const Teuchos::Comm<int>> c
   step([&] { resolve_conditions(*comm); });
   step([&] { add_bones(d.skeleton, *comm); });
   step([&] { check_conditions(d, *comm); });
-  step([&] { add_contact(d.contact, *comm); });
-  // The registered terms the scene asks for (scenes/term_registry.hpp), after contact.
-  step([&] { d.terms.add_terms(TermContext{*system_, *comm, dynamic()}); });
+  // The registered terms the scene asks for (scenes/term_registry.hpp: contact, pressure).
+  step([&] { d.terms.add_terms(TermContext{*system_, *comm, *skeleton_, dynamic()}); });
   fix_prescribed_dofs();
   // Body force and gravity ramp with the load in a quasi-static run, and act in full from the start of
   // a dynamic one.
@@ -147,13 +146,6 @@ void Scene::check_conditions(const SceneDescription& d, const Teuchos::Comm<int>
                            bcs_[conflict].name + "' and '" + bc.name + "'",
                        InputErrorKind::ConflictingConditions);
   }
-}
-
-void Scene::add_contact(const ContactParameters& p, const Teuchos::Comm<int>& comm) {
-  if (!p.active()) return;
-  colliders_ = std::make_unique<Colliders>(p, *skeleton_, comm, "Contact");
-  contact_ = make_contact_term(p, *system_, *colliders_);
-  system_->add_term(contact_);
 }
 
 void Scene::fix_prescribed_dofs() {

@@ -20,8 +20,7 @@ struct SceneFileParameters {
   MaterialParameters material;
   LoadingParameters loading;
   SkeletonParameters skeleton;
-  ContactParameters contact;
-  SceneTerms terms;  // the registered terms' sections (scenes/term_registry.hpp)
+  SceneTerms terms;  // the registered terms' sections: Contact, Pressure (scenes/term_registry.hpp)
   TimeParameters time;
   SolverParameters solver;
   OutputParameters output;
@@ -34,7 +33,6 @@ struct SceneFileParameters {
     v.section("Material", material, "hyperelastic law(s) (required)");
     v.section("Loading", loading, "boundary conditions, body force and load steps");
     v.section("Skeleton", skeleton, "bones that drive the flesh");
-    v.section("Contact", contact, "self contact and kinematic colliders (penalty springs on the surface)");
     terms.visit(v);
     v.section("Time", time, "quasi-static load steps, or time steps with mass (dynamics)");
     v.section("Solver", solver, "Newton, CG and multigrid parameters");
@@ -52,8 +50,7 @@ struct SceneConfig {
   SceneFileParameters params;   // every section, parsed and checked
 
   SceneDescription scene() const {
-    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton, params.contact, params.terms,
-            params.time};
+    return {params.scene, file, params.mesh, params.material, params.loading, params.skeleton, params.terms, params.time};
   }
 };
 

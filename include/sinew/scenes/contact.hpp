@@ -16,6 +16,7 @@
 #include <sinew/algebra/terms/contact.hpp>
 #include <sinew/core/section.hpp>
 #include <sinew/scenes/skeleton.hpp>
+#include <sinew/scenes/term_kind.hpp>
 
 namespace sinew {
 
@@ -124,7 +125,20 @@ class Colliders {
 // The contact term of a scene (collective): ContactSettings from the section, automatic values scaled
 // with the stiffest law and the mesh (a traction of mu_L + lambda_L pushes a surface point in by a
 // tenth of a cell; thickness 0.05 h; margin thickness + h / 2), collider poses from `colliders` (which
-// must outlive the term). Throws InputError ("Contact: ...") for a margin not above the thickness.
-std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system, const Colliders& colliders);
+// the term keeps). Throws InputError ("Contact: ...") for a margin not above the thickness.
+std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system,
+                                               std::shared_ptr<const Colliders> colliders);
+
+// The Contact section as a registered term kind (scenes/term_registry.hpp).
+struct Contact {
+  using Parameters = ContactParameters;
+  static constexpr const char* section = "Contact";
+  static constexpr const char* doc = "self contact and kinematic colliders (penalty springs on the surface)";
+  static bool active(const Parameters& p) { return p.active(); }
+  static std::shared_ptr<EnergyTerm> make(const Parameters& p, const TermContext& c);
+  static void resolve_paths(Parameters& p, const std::function<void(std::string&)>& resolve) {
+    for (auto& [name, collider] : p.colliders) resolve(collider.surface);
+  }
+};
 
 }  // namespace sinew

@@ -113,8 +113,7 @@ struct SceneDescription {
   MaterialParameters material;
   LoadingParameters loading;
   SkeletonParameters skeleton;
-  ContactParameters contact;
-  SceneTerms terms;
+  SceneTerms terms;  // contact and the other registered terms (scenes/term_registry.hpp)
   TimeParameters time;
 };
 
@@ -160,8 +159,7 @@ class Scene {
 
   // Contact (null without a Contact section): a term of the system, whose rounds the driver runs as
   // every term's (System::round). Collider poses follow apply_load.
-  ContactTerm* contact() { return contact_.get(); }
-  bool self_contact() const { return contact_ && contact_->settings().self; }
+  ContactTerm* contact() { return system_->find_term<ContactTerm>(); }
 
  private:
   // The construction's steps, in order (each throws InputError naming its entry; the constructor adds
@@ -170,7 +168,6 @@ class Scene {
   void resolve_conditions(const Teuchos::Comm<int>& comm);
   void add_bones(const SkeletonParameters& p, const Teuchos::Comm<int>& comm);
   void check_conditions(const SceneDescription& d, const Teuchos::Comm<int>& comm) const;
-  void add_contact(const ContactParameters& p, const Teuchos::Comm<int>& comm);
   void fix_prescribed_dofs();
 
   std::string name_;
@@ -178,8 +175,6 @@ class Scene {
   TimeParameters time_;
   std::unique_ptr<System> system_;
   std::unique_ptr<Skeleton> skeleton_;
-  std::unique_ptr<Colliders> colliders_;
-  std::shared_ptr<ContactTerm> contact_;
   std::vector<BoundaryCondition> bcs_;
   std::vector<char> free_;  // owned nodes with no prescribed component
   Kokkos::View<double* [3]>::HostMirror X_;  // reference coordinates of local nodes

@@ -23,12 +23,14 @@
 
 namespace sinew {
 
-// What a term's make() may use: the system (its mesh and maps), the communicator, and whether the run
-// is dynamic (loads in full from the start rather than ramped). make() throws InputError naming the
+// What a term's make() may use: the system (its mesh and maps), the communicator, the skeleton, and
+// whether the run is dynamic (loads in full from the start rather than ramped). make() throws InputError naming the
 // section's entry at fault; the scene adds the file's name.
+class Skeleton;
 struct TermContext {
   System& system;
   const Teuchos::Comm<int>& comm;
+  const Skeleton& skeleton;  // bones a term may follow (colliders carried by a bone)
   bool dynamic = false;
 };
 
@@ -42,6 +44,15 @@ struct TermKinds {
   }
   // Adds each active term to the context's system (collective).
   void add_terms(const TermContext& c) const { add_each(c, std::index_sequence_for<Kinds...>{}); }
+  // The section of kind K.
+  template <class K>
+  typename K::Parameters& of() {
+    return std::get<typename K::Parameters>(parameters);
+  }
+  template <class K>
+  const typename K::Parameters& of() const {
+    return std::get<typename K::Parameters>(parameters);
+  }
   // Relative file names in the sections, resolved by `resolve` (kinds that have any say so).
   void resolve_paths(const std::function<void(std::string&)>& resolve) {
     resolve_each(resolve, std::index_sequence_for<Kinds...>{});
