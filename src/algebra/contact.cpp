@@ -472,7 +472,6 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
   const Mesh& mesh = system_.mesh();
   const auto& T = surface_.triangles;
   const auto& x = at.surface;
-  auto closest_deformed = [&](int t, const Vec& p, double w[3]) { return closest_on_triangle(p, x[T[t][0]], x[T[t][1]], x[T[t][2]], w); };
   auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
   const bool hex = mesh.type == ElementType::Hex8;
   const int npe = nodes_per_element(mesh.type);
@@ -516,29 +515,8 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
       continue;
     }
     closest_on_triangle(Xref, surface_.X[T[t][0]], surface_.X[T[t][1]], surface_.X[T[t][2]], w);
-    Vec q = w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]];
-    double d2 = distance2(x[v], q);
-    int refined = 0;
-    for (int iter = 0; settings_.refine && iter < 8; ++iter) {
-      int next = -1;
-      double nw[3] = {0, 0, 0};
-      for (int m : T[t])
-        for (int k = surface_.tri_offsets[m]; k < surface_.tri_offsets[m + 1]; ++k) {
-          const int t2 = surface_.vertex_tris[k];
-          if (t2 == t || excluded(t2, static_cast<int>(v))) continue;
-          double w2[3];
-          const double dd = distance2(x[v], closest_deformed(t2, x[v], w2));
-          if (dd < d2 * (1.0 - 1e-12)) {
-            d2 = dd;
-            next = t2;
-            std::copy(w2, w2 + 3, nw);
-          }
-        }
-      if (next < 0) break;
-      t = next;
-      std::copy(nw, nw + 3, w);
-      refined = 1;
-    }
+    double d2 = distance2(x[v], w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]);
+    const int refined = settings_.refine ? refine_target(x, static_cast<int>(v), t, w, d2) : 0;
     // The spring's direction: from the sample out to the target point (the gradient of the distance,
     // also right where the target lies on an edge or a corner), or the target's normal when the two
     // points coincide or disagree about which side is out.
@@ -549,6 +527,35 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     stats.deepest = std::max(stats.deepest, std::sqrt(d2));
   }
   return found;
+}
+
+int ContactTerm::refine_target(const std::vector<Vec>& x, int v, int& t, double w[3], double& d2) const {
+  // The paper's local optimization: walk from the mapped target over the triangles around its
+  // vertices (away from the sample's ring) to the closest point of the deformed surface; "typically
+  // converges in a single iteration" (at most 8 here). Returns 1 when the target moved.
+  const auto& T = surface_.triangles;
+  int refined = 0;
+  for (int iter = 0; iter < 8; ++iter) {
+    int next = -1;
+    double nw[3] = {0, 0, 0};
+    for (int m : T[t])
+      for (int k = surface_.tri_offsets[m]; k < surface_.tri_offsets[m + 1]; ++k) {
+        const int t2 = surface_.vertex_tris[k];
+        if (t2 == t || excluded(t2, v)) continue;
+        double w2[3];
+        const double dd = distance2(x[v], closest_on_triangle(x[v], x[T[t2][0]], x[T[t2][1]], x[T[t2][2]], w2));
+        if (dd < d2 * (1.0 - 1e-12)) {
+          d2 = dd;
+          next = t2;
+          std::copy(w2, w2 + 3, nw);
+        }
+      }
+    if (next < 0) break;
+    t = next;
+    std::copy(nw, nw + 3, w);
+    refined = 1;
+  }
+  return refined;
 }
 
 void ContactTerm::proximity_candidates(const Positions& at, const std::vector<char>& paired, const std::vector<double>& carried,

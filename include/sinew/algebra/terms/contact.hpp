@@ -196,6 +196,8 @@ class ContactTerm final : public EnergyTerm {
                                          ContactDetection& stats) const;
   std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
                                            const std::vector<double>& carried, ContactDetection& stats) const;
+  // Moves target triangle t and weights w of sample v to the closest deformed-surface point nearby.
+  int refine_target(const std::vector<geom::Vec>& x, int v, int& t, double w[3], double& d2) const;
   void proximity_candidates(const Positions& at, const std::vector<char>& paired, const std::vector<double>& carried,
                             std::vector<Candidate>& found) const;
   long long choose(std::vector<Candidate> all, ContactDetection& stats);  // fills chosen_; returns new pushing pairs
