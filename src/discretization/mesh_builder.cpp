@@ -19,6 +19,7 @@ Mesh build_scene_mesh(const MeshParameters& p, const Teuchos::Comm<int>& comm) {
         const RigFile rig = read_rig_file(p.rig);
         const RigClip* clip = p.rig_rest_time >= 0.0 ? rig.clip(p.rig_rest_clip) : nullptr;
         if (p.rig_rest_time >= 0.0 && !clip) throw InputError(p.rig + ": no clip '" + p.rig_rest_clip + "' for the rest pose");
+        if (clip) check_rest_time(*clip, p.rig_rest_time, p.rig);
         surface = rig_surface(rig, p.rig_meshes, clip, p.rig_rest_time);
       } else {
         surface = read_triangle_surface(p.surface);

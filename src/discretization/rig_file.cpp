@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -318,6 +319,16 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const
   if (s.triangles.empty()) bad(rig.path, "the chosen meshes have no triangles");
   s.set_bounds();
   return s;
+}
+
+void check_rest_time(const RigClip& clip, double seconds, const std::string& path) {
+  if (seconds <= clip.duration + 1e-9) return;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g s lies past the end of", seconds);
+  char end[48];
+  std::snprintf(end, sizeof end, " (%g s)", clip.duration);
+  throw InputError(std::string("Skeleton: 'Rest time' ") + buf + " the clip '" + clip.name + "' of " + path + end +
+                   "; give a time within the clip (or none: the bind pose)");
 }
 
 TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip, double seconds) {

@@ -67,8 +67,16 @@ void check_mesh_file(const SceneConfig& c) {
     if (p.mesh.type == MeshType::Voxelize) read_triangle_surface(p.mesh.surface);
     // A rig: the file, the meshes named as the flesh, the clip named for the bones.
     if (p.mesh.type == MeshType::Rig) {
+      RigFile rig;
       try {
-        const RigFile rig = read_rig_file(p.mesh.rig);
+        rig = read_rig_file(p.mesh.rig);
+      } catch (const InputError& e) {
+        throw e.prefixed("Mesh: ");
+      }
+      // The rest pose within its clip (Skeleton's 'Rest time', which the mesh takes).
+      if (p.mesh.rig_rest_time >= 0.0)
+        if (const RigClip* clip = rig.clip(p.mesh.rig_rest_clip)) check_rest_time(*clip, p.mesh.rig_rest_time, p.mesh.rig);
+      try {
         rig_surface(rig, p.mesh.rig_meshes, p.mesh.rig_rest_time >= 0.0 ? rig.clip(p.mesh.rig_rest_clip) : nullptr, p.mesh.rig_rest_time);
       } catch (const InputError& e) {
         throw e.prefixed("Mesh: ");

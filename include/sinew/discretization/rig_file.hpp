@@ -116,6 +116,9 @@ RigFile read_rig_file(const std::string& path);
 // pose of `clip` at `seconds` (nullptr: the bind pose); turned outward as a whole when its signed
 // volume is negative. Throws InputError naming a mesh the file does not have (and those it has).
 TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const RigClip* clip = nullptr, double seconds = 0.0);
+// A rest pose at `seconds` of `clip` (of the file at `path`) must lie within the clip: throws InputError
+// ("Skeleton: 'Rest time' ... lies past the end of ...") otherwise.
+void check_rest_time(const RigClip& clip, double seconds, const std::string& path);
 // The same skinned by given world transforms of every node (pose()'s, or a retargeted motion's), its
 // triangles as the file stores them (not turned).
 TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const std::vector<Affine>& world);
