@@ -20,6 +20,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -52,6 +53,14 @@ std::string rounds_time(const StepRecord& rec) {
   char buf[64];
   std::snprintf(buf, sizeof buf, ", rounds %.2f", rec.seconds_rounds);
   return buf;
+}
+
+// Two attempts' Newton residuals agree to 4 digits, iteration by iteration.
+bool same_path(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.empty() || a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!(std::fabs(a[i] - b[i]) <= 1e-4 * std::max(std::fabs(a[i]), std::fabs(b[i])))) return false;
+  return true;
 }
 
 }  // namespace
@@ -177,6 +186,11 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   rec.cuts = at_.cuts;
   auto trial = scene.system().create_vector();
   bool first_attempt = true;
+  // The Newton residuals of this attempt, and of the last failed one from the same state: a cut that
+  // repeats them (to 4 digits) shows that the trouble does not depend on the load, so cutting again
+  // would only repeat it (a character's contact found inside at rest did so through 6 cuts).
+  std::vector<double> residuals, failed_before;
+  double failed_from = -1.0;
   while (at_.load < target - 1e-14) {
     const double t = std::min(at_.load + dt, target);
     SolveReport predicted;  // the tangent predictor's solve, when there is one
@@ -197,7 +211,9 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
                   duration(elapsed).c_str(), eta.c_str());
       std::fflush(stdout);
     }
+    residuals.clear();
     auto progress = [&](const NewtonIterate& it) {
+      residuals.push_back(it.residual);
       out_->log_newton(k, t, it);
       if (!talk_) return;
       std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations,
@@ -221,6 +237,17 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     if (r.status == SolveStatus::Interrupted) return StepOutcome::Stopped;
     scene.system().abandon_step();
     if (talk_) std::printf("  step did not converge: %s\n", r.reason().c_str());
+    if (failed_from == at_.load && same_path(residuals, failed_before)) {
+      if (comm_->getRank() == 0)
+        std::fprintf(stderr,
+                     "sinew: step %d did not converge, and cutting the %s made no difference: the attempt after cut %d "
+                     "repeated the one before it (%zu Newton iterations, the same residuals to 4 digits), so the "
+                     "trouble does not depend on the load (%s); the last converged state (load %.6g) is in %s\n",
+                     k, stepper_->cut_name(), rec.cuts, residuals.size(), r.reason().c_str(), at_.load, out_->directory().c_str());
+      return StepOutcome::Failed;
+    }
+    failed_from = at_.load;
+    failed_before = residuals;
     if (rec.cuts >= scene.max_cuts()) {
       if (comm_->getRank() == 0)
         std::fprintf(stderr,
