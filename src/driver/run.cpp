@@ -274,7 +274,8 @@ SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(
   for (int round = 0;; ++round) {
     const auto start = std::chrono::steady_clock::now();
     const System::Round terms = sys.round(trial, round);
-    rec.seconds_rounds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // Counted where a term has rounds (it reports them), so that a scene without shows none.
+    if (!terms.lines.empty()) rec.seconds_rounds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     rec.pattern_changes += terms.pattern_changed;
     if (talk_) {
       for (const auto& line : terms.lines) std::printf("  %s\n", line.c_str());
