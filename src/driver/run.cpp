@@ -220,7 +220,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
                   it.step, it.exact_hessian ? "  (exact Hessian)" : "");
       std::fflush(stdout);
     };
-    const SolveReport r = solve(t, *trial, progress, rec);
+    const SolveReport r = solve(*trial, progress, rec);
     rec.solve.accumulate(predicted);
     rec.solve.accumulate(r);
     if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
@@ -264,9 +264,8 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   return StepOutcome::Done;
 }
 
-SolveReport Simulation::solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress,
+SolveReport Simulation::solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress,
                               StepRecord& rec) {
-  (void)t;
   System& sys = scene_->system();
   SolveReport sum;
   // Round 0 sets the terms up at the first guess (contact pairs); after each converged solve the terms

@@ -730,6 +730,13 @@ class CheckpointFile {
     }
     if (H5Dread(d.id(), type, mem.id(), sp.id(), H5P_DEFAULT, out) < 0) fail_(std::string("cannot read ") + name);
   }
+  // The rank of a dataset and its extents (dims[1] = 1 for one dimension).
+  int extent(const std::string& name, hsize_t dims[2]) const {
+    H5 d(H5Dopen2(id(), name.c_str(), H5P_DEFAULT), H5Dclose, path_ + ": " + name);
+    H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
+    dims[1] = 1;
+    return H5Sget_simple_extent_dims(sp.id(), dims, nullptr);
+  }
   void fail(const std::string& why) const { fail_(why); }
 
  private:
@@ -808,14 +815,9 @@ struct NodeField {
 
 void read_node_field(const CheckpointFile& file, long long global_nodes, long long r0, long long rows, NodeField& f) {
   if (!file.has(f.name)) file.fail(std::string("has no ") + f.name + " dataset");
-  {
-    H5 d(H5Dopen2(file.id(), f.name, H5P_DEFAULT), H5Dclose, std::string(f.name));
-    H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-    hsize_t dims[2] = {0, 0};
-    if (H5Sget_simple_extent_ndims(sp.id()) != 2 || H5Sget_simple_extent_dims(sp.id(), dims, nullptr) != 2 ||
-        dims[0] != static_cast<hsize_t>(global_nodes) || dims[1] != 3)
-      file.fail(std::string(f.name) + " does not have the shape nodes x 3 of this mesh");
-  }
+  hsize_t dims[2] = {0, 0};
+  if (file.extent(f.name, dims) != 2 || dims[0] != static_cast<hsize_t>(global_nodes) || dims[1] != 3)
+    file.fail(std::string(f.name) + " does not have the shape nodes x 3 of this mesh");
   f.values.resize(3 * rows);
   file.read_rows(f.name, H5T_NATIVE_DOUBLE, r0, rows, 3, f.values.data());
   for (long long i = 0; i < 3 * rows; ++i)
@@ -823,17 +825,10 @@ void read_node_field(const CheckpointFile& file, long long global_nodes, long lo
       file.fail(std::string(f.name) + " row " + std::to_string(r0 + i / 3) + " holds a non-finite value (corrupt file?)");
 }
 
-// Reads the states of the system's terms from a checkpoint (collective; a term the file has no group
-// for is left out). Each rank reads its block of nodal rows and a Tpetra import takes them to the
-// ranks owning their nodes.
-Output::TermStates read_term_states(const std::string& path, const System& sys) {
-  const Mesh& m = sys.mesh();
-  MPI_Comm comm = raw_comm(*sys.comm());
-  int rank = 0, P = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &P);
-  const long long N = m.global_nodes, r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
-  auto fail = [&](const std::string& why) { throw InputError("restart file '" + path + "': " + why, InputErrorKind::File); };
+// The energy terms' states in a checkpoint (write_term_states), read in the two phases of
+// read_checkpoint: each rank reads the shared arrays and its block of nodal rows from the file it has
+// open, then the nodal rows go to the ranks owning their nodes (a Tpetra import by node id).
+struct TermBlocks {
   struct Block {
     std::string term, key;
     int components;
@@ -841,75 +836,64 @@ Output::TermStates read_term_states(const std::string& path, const System& sys) 
   };
   Output::TermStates states;
   std::vector<Block> blocks;
-  std::vector<long long> gid(rows);
-  collectively(comm, [&] {
-    QuietHdf5 quiet;
-    const CheckpointFile file(path, fail);
-    auto read = [&](const std::string& name, hid_t type, long long first, long long count, int cols, void* out) {
-      file.read_rows(name.c_str(), type, first, count, cols, out);
-    };
-    auto extent = [&](const std::string& name, hsize_t dims[2]) {
-      H5 d(H5Dopen2(file.id(), name.c_str(), H5P_DEFAULT), H5Dclose, path + ": " + name);
-      H5 sp(H5Dget_space(d.id()), H5Sclose, "dataspace");
-      dims[1] = 1;
-      return H5Sget_simple_extent_dims(sp.id(), dims, nullptr);
-    };
-    if (file.has("/node_gid")) {
-      read("/node_gid", H5T_NATIVE_LLONG, r0, rows, 1, gid.data());
-    } else {
-      for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;
-    }
-    for (const auto& term : sys.terms()) {
-      const std::string group = std::string("/term ") + term->name();
-      if (!file.has(group.c_str())) continue;
-      H5 g(H5Gopen2(file.id(), group.c_str(), H5P_DEFAULT), H5Gclose, path + ": " + group);
-      H5G_info_t info;
-      if (H5Gget_info(g.id(), &info) < 0) fail("cannot list " + group);
-      TermState state;
-      for (hsize_t k = 0; k < info.nlinks; ++k) {
-        char buf[256] = {0};
-        if (H5Lget_name_by_idx(g.id(), ".", H5_INDEX_NAME, H5_ITER_INC, k, buf, sizeof buf, H5P_DEFAULT) < 0) fail("cannot list " + group);
-        const std::string item = buf, dataset = group + "/" + item;
-        hsize_t dims[2] = {0, 1};
-        const int ndims = extent(dataset, dims);
-        if (item.rfind("shared ", 0) == 0) {
-          std::vector<double> record(dims[0]);
-          if (ndims != 1 || dims[0] < 1) fail(dataset + " is not a record (corrupt file?)");
-          read(dataset, H5T_NATIVE_DOUBLE, 0, static_cast<long long>(dims[0]), 1, record.data());
-          if (record[0] != static_cast<double>(dims[0] - 1)) fail(dataset + " does not hold its length (corrupt file?)");
-          state.shared.emplace_back(item.substr(7), std::vector<double>(record.begin() + 1, record.end()));
-        } else if (item.rfind("nodal ", 0) == 0) {
-          if (dims[0] != static_cast<hsize_t>(N)) fail(dataset + " does not have a row per node of this mesh");
-          Block b{term->name(), item.substr(6), static_cast<int>(dims[1]), std::vector<double>(rows * dims[1])};
-          read(dataset, H5T_NATIVE_DOUBLE, r0, rows, b.components, b.values.data());
-          blocks.push_back(std::move(b));
-        }
+};
+
+void read_term_blocks(const CheckpointFile& file, const System& sys, long long r0, long long rows, TermBlocks& out) {
+  for (const auto& term : sys.terms()) {
+    const std::string group = std::string("/term ") + term->name();
+    if (!file.has(group.c_str())) continue;
+    H5 g(H5Gopen2(file.id(), group.c_str(), H5P_DEFAULT), H5Gclose, group);
+    H5G_info_t info;
+    if (H5Gget_info(g.id(), &info) < 0) file.fail("cannot list " + group);
+    TermState state;
+    for (hsize_t k = 0; k < info.nlinks; ++k) {
+      char buf[256] = {0};
+      if (H5Lget_name_by_idx(g.id(), ".", H5_INDEX_NAME, H5_ITER_INC, k, buf, sizeof buf, H5P_DEFAULT) < 0)
+        file.fail("cannot list " + group);
+      const std::string item = buf, dataset = group + "/" + item;
+      hsize_t dims[2] = {0, 1};
+      const int ndims = file.extent(dataset, dims);
+      if (item.rfind("shared ", 0) == 0) {
+        if (ndims != 1 || dims[0] < 1) file.fail(dataset + " is not a record (corrupt file?)");
+        std::vector<double> record(dims[0]);
+        file.read_rows(dataset.c_str(), H5T_NATIVE_DOUBLE, 0, static_cast<long long>(dims[0]), 1, record.data());
+        if (record[0] != static_cast<double>(dims[0] - 1)) file.fail(dataset + " does not hold its length (corrupt file?)");
+        state.shared.emplace_back(item.substr(7), std::vector<double>(record.begin() + 1, record.end()));
+      } else if (item.rfind("nodal ", 0) == 0) {
+        if (dims[0] != static_cast<hsize_t>(sys.mesh().global_nodes)) file.fail(dataset + " does not have a row per node of this mesh");
+        TermBlocks::Block b{term->name(), item.substr(6), static_cast<int>(dims[1]), std::vector<double>(rows * dims[1])};
+        file.read_rows(dataset.c_str(), H5T_NATIVE_DOUBLE, r0, rows, b.components, b.values.data());
+        out.blocks.push_back(std::move(b));
       }
-      states.emplace_back(term->name(), std::move(state));
     }
-  });
-  // Nodal rows to the ranks owning their nodes (the same blocks, in the same order, on every rank).
-  if (blocks.empty()) return states;
-  std::vector<GO> gids(gid.begin(), gid.end());
+    out.states.emplace_back(term->name(), std::move(state));
+  }
+}
+
+// Collective: the nodal blocks (rows of node ids `gid`) to the owned nodes, into their terms' states.
+Output::TermStates import_term_blocks(TermBlocks in, const std::vector<long long>& gid, const System& sys) {
+  if (in.blocks.empty()) return std::move(in.states);
+  const std::size_t rows = gid.size(), n_owned = sys.mesh().n_owned_nodes;
+  const std::vector<GO> gids(gid.begin(), gid.end());
   const auto block_map = Teuchos::rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
                                               Teuchos::ArrayView<const GO>(gids), 0, sys.comm()));
   const Import import(block_map, sys.owned_nodes());
-  for (Block& b : blocks) {
+  for (TermBlocks::Block& b : in.blocks) {
     MultiVector from(block_map, b.components), to(sys.owned_nodes(), b.components);
     {
       auto v = from.getLocalViewHost(Tpetra::Access::OverwriteAll);
-      for (long long r = 0; r < rows; ++r)
+      for (std::size_t r = 0; r < rows; ++r)
         for (int c = 0; c < b.components; ++c) v(r, c) = b.values[r * b.components + c];
     }
     to.doImport(from, import, Tpetra::INSERT);
-    TermState::Nodal nodal{b.key, b.components, std::vector<double>(m.n_owned_nodes * b.components)};
+    TermState::Nodal nodal{b.key, b.components, std::vector<double>(n_owned * b.components)};
     auto v = to.getLocalViewHost(Tpetra::Access::ReadOnly);
-    for (std::size_t n = 0; n < m.n_owned_nodes; ++n)
+    for (std::size_t n = 0; n < n_owned; ++n)
       for (int c = 0; c < b.components; ++c) nodal.values[n * b.components + c] = v(n, c);
-    for (auto& [name, state] : states)
+    for (auto& [name, state] : in.states)
       if (name == b.term) state.nodal.push_back(std::move(nodal));
   }
-  return states;
+  return std::move(in.states);
 }
 
 }  // namespace
@@ -932,6 +916,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
   const long long r0 = N * rank / P, rows = N * (rank + 1) / P - r0;
   std::vector<long long> gid(rows);
   std::vector<NodeField> fields{{"/displacement", &u, {}}};
+  TermBlocks term_blocks;
   collectively(comm, [&] {
     QuietHdf5 quiet;
     const CheckpointFile file(path, fail);
@@ -958,6 +943,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
       for (long long k = 0; k < rows; ++k) gid[k] = r0 + k;  // written before /node_gid existed: rows were ids
     }
     for (NodeField& f : fields) read_node_field(file, N, r0, rows, f);
+    if (terms) read_term_blocks(file, sys, r0, rows, term_blocks);
   });
   // The rows go to the ranks owning their nodes (a Tpetra import by global id).
   std::vector<GO> dofs(3 * rows);
@@ -983,7 +969,7 @@ LoadState Output::read_checkpoint(const std::string& path, const System& sys, in
           fail(std::string(f.name) + " does not cover node " + std::to_string(m.node_gid[i / 3]) + " (corrupt file?)");
     }
   });
-  if (terms) *terms = read_term_states(path, sys);
+  if (terms) *terms = import_term_blocks(std::move(term_blocks), gid, sys);
   return c;
 }
 

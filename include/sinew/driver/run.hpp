@@ -54,9 +54,9 @@ class Simulation {
   void print_header() const;
   // Advances the state through load step k, cutting the increment when a solve fails.
   StepOutcome advance(int k, StepRecord& rec);
-  // Solves for the state at load t from trial: rounds of the terms (System::round: contact's detection
+  // Solves for the step's state from trial (its prescribed values set): rounds of the terms (System::round: contact's detection
   // and tractions) and solves until no term asks for another.
-  SolveReport solve(double t, Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
+  SolveReport solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
   void print_step(const StepRecord& rec) const;
   // Collective: the step file of the current state, with the terms' node fields and a velocity.
   void write_step(int step, double load);
