@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,25 @@ inline void replace_durably(const std::string& tmp, const std::string& path) {
   if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
   const fs::path dir = fs::path(path).parent_path();
   sync_path(dir.empty() ? "." : dir.string(), true);
+}
+
+// Writes a file aside (PATH.tmp, opened with fopen's `mode`) with write(FILE*) (returning false when
+// a write came up short), checks the stream, and puts it in place durably. Throws std::runtime_error
+// naming the file when it cannot be written.
+template <class Write>
+void write_durably(const std::string& path, const char* mode, Write&& write) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), mode);
+  if (!f) throw std::runtime_error("cannot write " + tmp);
+  bool ok = false;
+  try {
+    ok = write(f) && std::ferror(f) == 0;
+  } catch (...) {
+    std::fclose(f);
+    throw;
+  }
+  if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
+  replace_durably(tmp, path);
 }
 
 }  // namespace sinew::io_detail

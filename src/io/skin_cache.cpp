@@ -110,14 +110,11 @@ class GlbBuilder {
 
 // Writes bytes aside and renames them into place.
 void write_file_durably(const std::string& path, const std::vector<const std::vector<char>*>& parts) {
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + tmp);
-  bool ok = true;
-  for (const auto* p : parts) ok = ok && std::fwrite(p->data(), 1, p->size(), f) == p->size();
-  ok = ok && std::ferror(f) == 0;
-  if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
-  io_detail::replace_durably(tmp, path);
+  io_detail::write_durably(path, "wb", [&](std::FILE* f) {
+    bool ok = true;
+    for (const auto* p : parts) ok = ok && std::fwrite(p->data(), 1, p->size(), f) == p->size();
+    return ok;
+  });
 }
 
 template <class T>

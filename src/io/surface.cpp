@@ -31,22 +31,19 @@ void write_obj_file(const std::string& path, const std::vector<double>& x, const
     for (int v : t)
       for (int d = 0; d < 3; ++d) normal[3 * v + d] += c[d];
   }
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw std::runtime_error("cannot write " + tmp);
-  std::fprintf(f, "# Sinew surface: %zu vertices, %zu triangles; %s\n", x.size() / 3, triangles.size(), comment.c_str());
-  for (std::size_t v = 0; v < x.size() / 3; ++v) std::fprintf(f, "v %.10g %.10g %.10g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
-  for (std::size_t v = 0; v < x.size() / 3; ++v) {
-    const double* m = &normal[3 * v];
-    const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    const double s = len > 0.0 ? 1.0 / len : 0.0;
-    std::fprintf(f, "vn %.6f %.6f %.6f\n", s * m[0], s * m[1], s * m[2]);
-  }
-  for (const auto& t : triangles)
-    std::fprintf(f, "f %d//%d %d//%d %d//%d\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1);
-  const bool ok = std::ferror(f) == 0;
-  if (std::fclose(f) != 0 || !ok) throw std::runtime_error("writing " + tmp + " failed (disk full?)");
-  io_detail::replace_durably(tmp, path);
+  io_detail::write_durably(path, "w", [&](std::FILE* f) {
+    std::fprintf(f, "# Sinew surface: %zu vertices, %zu triangles; %s\n", x.size() / 3, triangles.size(), comment.c_str());
+    for (std::size_t v = 0; v < x.size() / 3; ++v) std::fprintf(f, "v %.10g %.10g %.10g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+    for (std::size_t v = 0; v < x.size() / 3; ++v) {
+      const double* m = &normal[3 * v];
+      const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+      const double s = len > 0.0 ? 1.0 / len : 0.0;
+      std::fprintf(f, "vn %.6f %.6f %.6f\n", s * m[0], s * m[1], s * m[2]);
+    }
+    for (const auto& t : triangles)
+      std::fprintf(f, "f %d//%d %d//%d %d//%d\n", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1);
+    return true;  // the stream's error flag says the rest
+  });
 }
 
 EmbeddedSkin::EmbeddedSkin(const Mesh& mesh, const Teuchos::RCP<const Map>& owned_dofs) : mesh_(mesh) {
