@@ -73,6 +73,12 @@ inline double norm(const Mat9& H) {
   return std::sqrt(s);
 }
 
+inline double norm_diff(const Mat9& A, const Mat9& B) {
+  Mat9 D;
+  for (int k = 0; k < 81; ++k) D.a[k] = A.a[k] - B.a[k];
+  return norm(D);
+}
+
 // Finite-difference step for F: `base` times the smallest |singular value| (floored at 1e-4, capped at 1),
 // since energies with a log J or 1/(s_i + s_j) term curve on that length scale.
 inline double fd_step(const Mat3& F, double base) {

@@ -92,11 +92,6 @@ int over_samples(unsigned seed, std::initializer_list<double> nus, int per_kind,
   return count;
 }
 
-double norm_diff(const Mat9& A, const Mat9& B) {
-  Mat9 D;
-  for (int k = 0; k < 81; ++k) D.a[k] = A.a[k] - B.a[k];
-  return norm(D);
-}
 
 TEST(Materials, Pk1MatchesFiniteDifferencesOfEnergy) {
   Worst worst;

@@ -289,6 +289,12 @@ std::vector<TermState::Nodal> System::node_fields(const Vector& u) const {
   return fields;
 }
 
+std::vector<TermState::Nodal> System::term_element_fields() const {
+  std::vector<TermState::Nodal> fields;
+  for (const auto& term : terms_) term->element_fields(fields);
+  return fields;
+}
+
 bool System::update_pattern() {
   std::vector<std::pair<GlobalId, GlobalId>> wanted;
   for (const auto& t : terms_) t->couplings(wanted);

@@ -296,7 +296,7 @@ void Simulation::write_step(int step, double load) {
     fields.emplace_back("velocity", std::vector<double>(v.data(), v.data() + 3 * scene_->system().mesh().n_owned_nodes));
   }
   for (auto& f : scene_->system().node_fields(*u_)) fields.emplace_back(f.name, std::move(f.values));
-  out_->write_step(step, load, *u_, fields);
+  out_->write_step(step, load, *u_, fields, scene_->system().term_element_fields());
 }
 
 void Simulation::checkpoint() {

@@ -492,7 +492,8 @@ void Output::set_frame_clock(std::function<double(double load)> time, double fra
   frame_rate_ = frame_rate;
 }
 
-void Output::write_step(int step, double load, const Vector& u, const NodeFields& node_fields) {
+void Output::write_step(int step, double load, const Vector& u, const NodeFields& node_fields,
+                        const std::vector<TermState::Nodal>& element_fields) {
   const bool caches = skin_caches();
   if ((params_.surface || caches) && (step % (params_.every * params_.surface_every) == 0 || step == steps_)) {
     std::ostringstream what;
@@ -549,6 +550,8 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
       const int cols = values.size() == static_cast<std::size_t>(3 * n_owned) && n_owned > 0 ? 3 : 1;
       write_rows(file, "/" + name, H5T_NATIVE_DOUBLE, m.global_nodes, cols, first_node, n_owned, values.data(), tmp);
     }
+    for (const auto& f : element_fields)
+      write_rows(file, "/" + f.name, H5T_NATIVE_DOUBLE, m.global_elements, f.components, first_el, e_owned, f.values.data(), tmp);
     write_attribute(file, "load", load);
     write_attribute(file, "step", step);
     write_layout_attribute(file, "layout", layout_);
@@ -560,6 +563,8 @@ void Output::write_step(int step, double load, const Vector& u, const NodeFields
     MPI_Allreduce(&vector, &any, 1, MPI_INT, MPI_MAX, comm);
     node_fields_.emplace_back(f.first, any ? 3 : 1);
   }
+  element_fields_.clear();
+  for (const auto& f : element_fields) element_fields_.emplace_back(f.name, f.components);
   written_.erase(std::remove_if(written_.begin(), written_.end(), [&](const Written& w) { return w.step == step; }),
                  written_.end());
   written_.push_back({step, load, mesh_name_});
@@ -598,6 +603,8 @@ void Output::write_xdmf() const {
     attr("energy_density", "Scalar", "Cell", m.global_elements, 1, "/energy_density");
     for (const auto& [name, cols] : node_fields_)
       attr(name.c_str(), cols == 3 ? "Vector" : "Scalar", "Node", m.global_nodes, cols, ("/" + name).c_str());
+    for (const auto& [name, cols] : element_fields_)
+      attr(name.c_str(), cols == 3 ? "Vector" : "Scalar", "Cell", m.global_elements, cols, ("/" + name).c_str());
     x << "   </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";

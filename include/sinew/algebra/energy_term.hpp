@@ -158,7 +158,7 @@ class EnergyTerm {
 
   // Reporting. Columns of log.csv after the energy share's, and their values for the step just logged
   // (collective: may reduce); lines of the step's summary (rank 0 prints them); node fields of the step
-  // files (per owned node: `components` values, e.g. a pressure or a velocity).
+  // files (per owned node: `components` values, e.g. a pressure or a velocity) and element fields.
   virtual std::vector<std::string> log_columns() const { return {}; }
   virtual std::vector<double> log_values(const EvaluationTotals& totals) const {
     (void)totals;
@@ -171,6 +171,9 @@ class EnergyTerm {
   // Names and components of the node fields; the fields themselves, of the last evaluation.
   virtual std::vector<std::pair<std::string, int>> node_field_names() const { return {}; }
   virtual void node_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }
+  // The same per owned element (in the owned element order): a muscle's fibre direction.
+  virtual std::vector<std::pair<std::string, int>> element_field_names() const { return {}; }
+  virtual void element_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }
 };
 
 }  // namespace sinew

@@ -36,6 +36,8 @@ class System {
   ~System();
 
   const Mesh& mesh() const { return mesh_; }
+  // Shape-function gradients and point weights of the local elements (for terms with an element loop).
+  const ElementData& element_data() const { return elements_; }
   // The law of elements in no region (the only one for a mesh without regions).
   const MaterialSpec& material() const;
   // Largest (mu_L + |lambda_L|) over the laws in use: the stiffness scale of the energy's terms.
@@ -122,6 +124,8 @@ class System {
   // The terms' node fields at u (an evaluation first, when some term has any).
   std::vector<TermState::Nodal> node_fields(const Vector& u) const;
   std::vector<std::pair<std::string, int>> node_field_names() const;
+  // The terms' element fields (per owned element; a muscle's fibre direction), as they stand.
+  std::vector<TermState::Nodal> term_element_fields() const;
   // Collective: asks every term for its couplings and rebuilds the graph with them when some are
   // missing (the pattern only grows). Returns true, on every rank, when it changed.
   bool update_pattern();

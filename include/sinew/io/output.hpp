@@ -117,7 +117,8 @@ class Output {
   using NodeFields = std::vector<std::pair<std::string, std::vector<double>>>;
   // Collective: one step file and the XDMF index, and the surface when its turn has come. Every step of
   // a run must be given the same node fields (the XDMF index lists them for all).
-  void write_step(int step, double load, const Vector& u, const NodeFields& node_fields = {});
+  void write_step(int step, double load, const Vector& u, const NodeFields& node_fields = {},
+                  const std::vector<TermState::Nodal>& element_fields = {});
   // Path of the surface OBJ of a step.
   std::string surface_file(int step) const;
   // Another surface written with the boundary surface (same steps) as DIR/<prefix>_NNNNNN.obj: `at`
@@ -194,6 +195,7 @@ class Output {
   bool mesh_on_disk_ = false;                    // a restart found it already written
   Physics physics_;
   std::vector<std::pair<std::string, int>> node_fields_;  // extra node fields of the step files: name, components
+  std::vector<std::pair<std::string, int>> element_fields_;  // the terms' element fields: name, components
   std::unique_ptr<BoundarySurface> surface_;     // when surfaces are written
   std::unique_ptr<EmbeddedSkin> skin_;           // when a voxelized mesh carries its surface
   std::vector<std::pair<std::string, SurfaceAt>> sequences_;

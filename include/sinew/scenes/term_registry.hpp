@@ -6,10 +6,11 @@
 
 #include <sinew/scenes/contact.hpp>
 #include <sinew/scenes/term_kind.hpp>
+#include <sinew/scenes/terms/muscle.hpp>
 #include <sinew/scenes/terms/pressure.hpp>
 
 namespace sinew {
 
-using SceneTerms = TermKinds<Contact, PressureLoads>;
+using SceneTerms = TermKinds<Contact, PressureLoads, Muscles>;
 
 }  // namespace sinew
