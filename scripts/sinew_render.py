@@ -29,7 +29,7 @@ def parse_args(argv):
     p.add_argument("--steps", default="last",
                    help="which steps: 'last' (default), 'first', 'all', a comma list of step numbers, "
                         "or 'strip:N' for N steps evenly spread from the first to the last")
-    p.add_argument("--field", default="J", choices=["J", "energy_density", "displacement", "contact_pressure"],
+    p.add_argument("--field", default="J", choices=["J", "energy_density", "displacement", "contact_pressure", "activation"],
                    help="colour by this field (default J = det F: volume change; contact_pressure where the run "
                         "had contact: where flesh presses on flesh or on a collider)")
     p.add_argument("--range", default=None, help="colour range 'lo,hi' (default: over the shown steps)")
@@ -41,6 +41,9 @@ def parse_args(argv):
                         "body is turned so that it stands")
     p.add_argument("--rest", action="store_true", help="also draw the rest shape as a faint wireframe")
     p.add_argument("--edges", action="store_true", help="draw element edges on the surface")
+    p.add_argument("--fibers", action="store_true",
+                   help="draw the muscles' fibre directions (at rest) as dark strokes at their cells' centres, "
+                        "inside a translucent body (a run with a Muscles section)")
     p.add_argument("--skin", action="store_true",
                    help="draw the skin a voxelized mesh carries (skin_NNNNNN.obj) in flesh colour instead of the mesh")
     p.add_argument("--lbs", action="store_true",
@@ -132,6 +135,30 @@ def field_range(chosen, field):
         d = max(abs(lo - 1.0), abs(hi - 1.0), 1e-3)
         return 1.0 - d, 1.0 + d
     return (lo, hi) if hi > lo else (lo - 1e-12, hi + 1e-12)
+
+
+def draw_fibers(pv, view, body, shown, extent):
+    """The muscle cells' fibre directions (the "fiber" cell field, zero outside muscles) as strokes."""
+    for _, _, f in shown:
+        with h5py.File(f, "r") as h:
+            if "/fiber" not in h:
+                fail(f"{f} has no field 'fiber' (--fibers needs a run with a Muscles section)")
+    length = pv.Calculator(Input=body, AttributeType="Cell Data", ResultArrayName="fiber_length", Function="mag(fiber)")
+    muscle = pv.Threshold(Input=length, Scalars=["CELLS", "fiber_length"])
+    try:  # ParaView >= 5.10
+        muscle.LowerThreshold, muscle.UpperThreshold = 0.5, 2.0
+    except AttributeError:
+        muscle.ThresholdRange = [0.5, 2.0]
+    centres = pv.CellCenters(Input=muscle)
+    strokes = pv.Glyph(Input=centres, GlyphType="Line")
+    strokes.OrientationArray = ["POINTS", "fiber"]
+    strokes.ScaleArray = ["POINTS", "No scale array"]
+    strokes.ScaleFactor = 0.02 * max(extent)
+    strokes.GlyphMode = "All Points"
+    g = pv.Show(strokes, view)
+    g.ColorArrayName = [None, ""]
+    g.AmbientColor = g.DiffuseColor = [0.15, 0.1, 0.1]
+    g.LineWidth = 2.0
 
 
 def main(argv):
@@ -244,6 +271,9 @@ def main(argv):
                 d.EdgeColor = [0.2, 0.2, 0.2]
             pv.ColorBy(d, ("POINTS" if a.field in ("displacement", "contact_pressure") else "CELLS", a.field))
             d.LookupTable = lut
+            if a.fibers:  # the body translucent: the strokes lie inside it
+                d.Opacity = 0.35
+                draw_fibers(pv, view, moved, shown, extent)
         if a.rest:
             rest = pv.Transform(Input=pv.ForceTime(Input=reader, ForcedTime=0.0, IgnorePipelineTime=1))
             rest.Transform.Rotate = rotate
@@ -265,7 +295,7 @@ def main(argv):
             t.ColorArrayName = [None, ""]
     bar = pv.GetScalarBar(lut, view)
     bar.Title = {"J": "J = det F", "energy_density": "energy density", "displacement": "|u|",
-                 "contact_pressure": "contact pressure"}[a.field]
+                 "contact_pressure": "contact pressure", "activation": "muscle activation"}[a.field]
     bar.ComponentTitle = ""
     bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
     bar.Visibility = 0 if a.skin else 1

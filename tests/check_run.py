@@ -3,6 +3,7 @@ totals of Newton iterations, the final min J and volume change, no inverted poin
 far the flesh at the far end turned about an axis through a pivot.
 Usage: check_run.py RESULTS_DIR [--newton LO HI] [--min-j LO HI] [--volume-percent LO HI]
                     [--turn-degrees LO HI --pivot X Y Z --axis X Y Z --toward X Y Z]
+                    [--rise-mm LO HI --rise-x X0 X1] [--last COLUMN LO HI]
 """
 import argparse
 import csv
@@ -21,6 +22,10 @@ ap.add_argument("--turn-degrees", nargs=2, type=float)
 ap.add_argument("--pivot", nargs=3, type=float)
 ap.add_argument("--axis", nargs=3, type=float)
 ap.add_argument("--toward", nargs=3, type=float, help="the far tenth is taken along this direction from the pivot")
+ap.add_argument("--rise-mm", nargs=2, type=float, help="how far the top (largest z) of the nodes with x in --rise-x rose")
+ap.add_argument("--rise-x", nargs=2, type=float)
+ap.add_argument("--last", nargs=3, action="append", default=[], metavar=("COLUMN", "LO", "HI"),
+                help="a log.csv column's value at the last step")
 a = ap.parse_args()
 
 
@@ -54,4 +59,13 @@ if a.turn_degrees:
     angle = np.degrees(np.arctan2(np.einsum("ij,ij->i", np.cross(r0, r1), np.tile(n, (far.sum(), 1))),
                                   np.einsum("ij,ij->i", r0, r1)))
     within("median turn of the far tenth (degrees)", float(np.median(angle)), a.turn_degrees)
+if a.rise_mm:
+    last = sorted(glob.glob(os.path.join(a.results, "step_*.h5")))[-1]
+    with h5py.File(os.path.join(a.results, "mesh.h5"), "r") as m, h5py.File(last, "r") as s:
+        X, x = m["/coordinates"][...], s["/position"][...]
+    band = (X[:, 0] >= a.rise_x[0]) & (X[:, 0] <= a.rise_x[1])
+    within("rise of the top over x in [%g, %g] (mm)" % tuple(a.rise_x), 1000.0 * (x[band, 2].max() - X[band, 2].max()), a.rise_mm)
+for column, lo, hi in a.last:
+    assert column in rows[-1], f"log.csv has no column '{column}'"
+    within(f"last {column}", float(rows[-1][column]), (float(lo), float(hi)))
 print("physics as stated")
