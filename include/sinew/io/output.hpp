@@ -7,7 +7,8 @@
 //                          /node_gid, /element_gid; attribute layout (a digest of the row order)
 //   DIR/mesh_layoutK.h5    the same for a restart on another number of ranks (another row order)
 //   DIR/step_NNNNNN.h5     /position (x = X + u), /displacement, /J and /energy_density (per element),
-//                          /contact_pressure (per node, with contact), attributes: load fraction, step,
+//                          /contact_pressure (per node, with contact), /fiber and /activation (per
+//                          element, with muscles), attributes: load fraction, step,
 //                          layout (which mesh file's rows these follow; the XDMF index pairs them)
 //   DIR/NAME.xdmf          temporal collection over the steps written so far
 //   DIR/surface_NNNNNN.obj the deformed boundary surface with normals (surface.hpp), for renderers
