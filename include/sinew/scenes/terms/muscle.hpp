@@ -30,6 +30,7 @@
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/discretization/mesh_file.hpp>
+#include <sinew/scenes/region.hpp>
 #include <sinew/scenes/skeleton.hpp>
 #include <sinew/scenes/term_kind.hpp>
 
@@ -208,11 +209,9 @@ inline std::vector<int> elements_of(const Mesh& mesh, const std::string& region,
     return out;
   }
   std::vector<int> groups;
-  std::string rest = region.substr(6) + ",";
-  for (std::size_t a = 0, b; (b = rest.find(',', a)) != std::string::npos; a = b + 1) {
-    std::string name = rest.substr(a, b - a);
-    name.erase(0, name.find_first_not_of(' '));
-    name.erase(name.find_last_not_of(' ') + 1);
+  RegionParameters names;  // its 'group NAME, NAME' syntax, as boundary conditions read it
+  names.region = region;
+  for (const std::string& name : names.groups()) {
     const auto& eg = mesh.element_group_names;
     const auto it = std::find(eg.begin(), eg.end(), name);
     if (it == eg.end()) throw unknown_group(where + ": 'Region'", name, {}, eg);
