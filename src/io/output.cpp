@@ -216,7 +216,10 @@ void open_csv(std::ofstream& out, const std::string& path, int restart_step, con
 // Whether a file name is one Sinew writes aside (NAME.tmp next to NAME): the only .tmp files a new run
 // removes.
 bool own_temporary(const std::string& file, const std::string& scene) {
-  static const std::regex own(R"(((mesh(_layout\d+)?|checkpoint|step_\d{6})\.h5|(surface|skin)_\d{6}\.obj|(log|newton)\.csv)\.tmp)");
+  // Every file Sinew writes aside before putting it in place (io_detail::write_durably and the HDF5
+  // writers): step files, surfaces and skins, the skin caches and their rest shape, the logs.
+  static const std::regex own(
+      R"(((mesh(_layout\d+)?|checkpoint|step_\d{6})\.h5|(surface|skin|lbs)_\d{6}\.obj|skin_rest\.obj|skin\.(glb|pc2|frames)|(log|newton)\.csv)\.tmp)");
   return std::regex_match(file, own) || file == scene + ".xdmf.tmp";
 }
 
