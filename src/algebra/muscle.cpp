@@ -204,8 +204,6 @@ std::vector<std::string> MuscleTerm::summary(const EvaluationTotals&) const {
   return lines;
 }
 
-std::vector<std::pair<std::string, int>> MuscleTerm::element_field_names() const { return {{"fiber", 3}, {"activation", 1}}; }
-
 void MuscleTerm::element_fields(std::vector<TermState::Nodal>& fields) const {
   const std::size_t owned = mesh_.n_owned_elements;
   TermState::Nodal fiber{"fiber", 3, std::vector<double>(3 * owned, 0.0)}, act{"activation", 1, std::vector<double>(owned, 0.0)};

@@ -171,8 +171,8 @@ class EnergyTerm {
   // Names and components of the node fields; the fields themselves, of the last evaluation.
   virtual std::vector<std::pair<std::string, int>> node_field_names() const { return {}; }
   virtual void node_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }
-  // The same per owned element (in the owned element order): a muscle's fibre direction.
-  virtual std::vector<std::pair<std::string, int>> element_field_names() const { return {}; }
+  // The same per owned element (in the owned element order, each field naming its components): a
+  // muscle's fibre direction. Written as they stand, with no evaluation first.
   virtual void element_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }
 };
 

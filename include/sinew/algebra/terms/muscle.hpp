@@ -51,10 +51,8 @@ class MuscleTerm final : public EnergyTerm {
   std::vector<double> log_values(const EvaluationTotals& totals) const override;
   std::vector<std::string> summary(const EvaluationTotals& totals) const override;
   // Per owned element: "fiber" (the unit direction at rest; 0 outside every muscle) and "activation".
-  std::vector<std::pair<std::string, int>> element_field_names() const override;
   void element_fields(std::vector<TermState::Nodal>& fields) const override;
 
-  std::size_t muscles() const { return blocks_.size(); }
   double activation(std::size_t m) const { return blocks_[m].activation_now; }
   // The smallest and largest fibre stretch of muscle m at the last evaluation (all ranks; collective).
   std::array<double, 2> stretch_range(std::size_t m) const;
