@@ -7,6 +7,7 @@
 #include <sinew/algebra/system.hpp>
 #include <sinew/core/hash.hpp>
 
+#include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_LAPACK.hpp>
 #include <Tpetra_CrsMatrix.hpp>
 #include <Tpetra_Import.hpp>
@@ -77,23 +78,46 @@ inline double max_abs(const std::vector<std::vector<double>>& A) {
   return m;
 }
 
+// What a term reads and adds into for a state u alone: u imported onto the System's column map (into
+// uc, which must outlive the call) and this rank's owned rows.
+inline void term_call(const System& sys, const Vector& u, Vector& uc, TermInput& in, TermOutput& out) {
+  uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
+  auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
+  in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
+  out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
+}
+
 // One term's Hessian alone at u (no Dirichlet elimination), as a dense matrix.
 inline std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u) {
   auto K = sys.create_matrix();
   Vector uc(sys.column_dofs());
-  uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
   K->resumeFill();
   K->setAllToScalar(0.0);
   TermInput in;
-  auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
-  in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
-  in.want_matrix = true;
   TermOutput out;
+  term_call(sys, u, uc, in, out);
+  in.want_matrix = true;
   out.matrix = K->getLocalMatrixDevice();
-  out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
   term.add(in, out);
   K->fillComplete();
   return dense(*K);
+}
+
+// One term's energy alone at u (summed over ranks), and its gradient into f when given (collective).
+inline double term_energy(const System& sys, const EnergyTerm& term, const Vector& u, Vector* f = nullptr) {
+  Vector uc(sys.column_dofs());
+  TermInput in;
+  TermOutput out;
+  term_call(sys, u, uc, in, out);
+  if (f) {
+    f->putScalar(0.0);
+    in.want_force = true;
+    out.force = Kokkos::subview(f->getLocalViewDevice(Tpetra::Access::ReadWrite), Kokkos::ALL(), 0);
+  }
+  term.add(in, out);
+  double all = 0.0;
+  Teuchos::reduceAll(*sys.comm(), Teuchos::REDUCE_SUM, out.energy, Teuchos::outArg(all));
+  return all;
 }
 
 // Smallest eigenvalue of a dense symmetric matrix (LAPACK).

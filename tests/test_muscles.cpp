@@ -16,6 +16,8 @@
 #include <Tpetra_Vector.hpp>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 using namespace sinew;
@@ -75,7 +77,9 @@ TEST(Muscles, FibreLawDerivativesMatchFiniteDifferences) {
       const FiberPoint p = fibre(random_unit(rng), k, 1.5, 0.6, alpha);
       const Mat3 I = Mat3::identity();
       EXPECT_NEAR(p.energy(I), 0.0, 1e-15);
-      if (alpha == 0.0) EXPECT_EQ(norm(p.pk1(I)), 0.0);
+      if (alpha == 0.0) {
+        EXPECT_EQ(norm(p.pk1(I)), 0.0);
+      }
       for (const Mat3& F : fibre_samples(rng, p)) {
         const double scale = std::max({k, 1.5 * alpha, 1e-3});
         const double ep = norm(p.pk1(F) - fd_pk1(p, F, 1e-6)) / scale;
@@ -150,40 +154,18 @@ TEST(Muscles, TheMuscleTermsGradientAndHessianMatchFiniteDifferences) {
     MuscleTerm term(sys.comm(), mesh, sys.element_data(), {m});
     term.set_load(1.0);
     EXPECT_DOUBLE_EQ(term.activation(0), 0.7);
-    // Energy and force of the term alone (summed over ranks).
-    auto evaluate = [&](const Vector& u, Vector* f) {
-      Vector uc(sys.column_dofs());
-      uc.doImport(u, Import(sys.owned_dofs(), sys.column_dofs()), Tpetra::INSERT);
-      TermInput in;
-      auto uv = uc.getLocalViewDevice(Tpetra::Access::ReadOnly);
-      in.u = Kokkos::subview(uv, Kokkos::ALL(), 0);
-      in.want_force = f != nullptr;
-      TermOutput out;
-      out.owned_dofs = static_cast<int>(sys.owned_dofs()->getNodeNumElements());
-      if (f) {
-        f->putScalar(0.0);
-        auto fv = f->getLocalViewDevice(Tpetra::Access::ReadWrite);
-        out.force = Kokkos::subview(fv, Kokkos::ALL(), 0);
-        term.add(in, out);
-      } else {
-        term.add(in, out);
-      }
-      double all = 0.0;
-      Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, out.energy, Teuchos::outArg(all));
-      return all;
-    };
     auto u = sys.create_vector(), d = sys.create_vector();
     set_displacement(sys, *u, [](const std::array<double, 3>& X, int i, long long gid) {
       return 0.12 * hash_unit(gid, i) + (i == 0 ? -0.25 * X[0] : 0.1 * X[2]);  // shortened along x: active range
     });
     set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
     auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
-    evaluate(*u, f.get());
+    term_energy(sys, term, *u, f.get());
     const double h = 1e-6;
     auto up = sys.create_vector(), um = sys.create_vector();
     up->update(1.0, *u, h, *d, 0.0);
     um->update(1.0, *u, -h, *d, 0.0);
-    const double dE = (evaluate(*up, fp.get()) - evaluate(*um, fm.get())) / (2.0 * h);
+    const double dE = (term_energy(sys, term, *up, fp.get()) - term_energy(sys, term, *um, fm.get())) / (2.0 * h);
     const double fd_dot = f->dot(*d);
     EXPECT_NEAR(fd_dot, dE, 1e-6 * std::max(1.0, std::fabs(dE))) << to_string(type);
     // H d against (f(u + h d) - f(u - h d)) / 2h.
@@ -347,7 +329,9 @@ TEST(Muscles, AFullyActiveMuscleStopsAtItsContractionLimitAndKeepsItsVolume) {
                   s[0], s[1], 100.0 * (J - 1.0));
     EXPECT_GE(s[0], 0.7 - 1e-9) << model;
     EXPECT_LT(s[0], 0.73) << model;
-    if (std::string(model) == "stable-neohookean") EXPECT_LT(std::fabs(J - 1.0), 0.01);
+    if (std::string(model) == "stable-neohookean") {
+      EXPECT_LT(std::fabs(J - 1.0), 0.01);
+    }
   }
 }
 
@@ -412,4 +396,59 @@ TEST(Muscles, ALineOfActionFiresTheMuscleAsItShortens) {
   }
   term->set_load(1.0);
   EXPECT_GT(term->activation(0), 0.9);  // the insertion swung up to (1, 0.5, 1.5): L = 1.118, 0.56 shorter
+}
+
+// Fibres and activation from CSV files: a header line is skipped, every element of the region takes its
+// row (normalized), the activation is linear between the file's rows; a row that is not plain finite
+// numbers, or an element the file leaves out, is an input error naming the file, line and culprit.
+TEST(Muscles, FibresAndActivationComeFromCsvFiles) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::absolute("test_results/muscle_csv");
+  fs::create_directories(dir);
+  const std::string fibres = (dir / "fibres.csv").string(), activation = (dir / "activation.csv").string();
+  auto write = [](const std::string& path, const std::string& text) {
+    if (world()->getRank() == 0) std::ofstream(path) << text;
+    world()->barrier();
+  };
+  std::string rows = "element, x, y, z\n";
+  for (int e = 0; e < 54; ++e) rows += std::to_string(e) + ", 0, " + std::to_string(1 + e % 3) + ", 0\n";
+  write(fibres, rows);
+  write(activation, "t, activation\n0.0, 0.0\n0.5, 0.6\n1.0, 0.2\n");
+  const std::string muscle = "<Parameter name=\"Fiber file\" type=\"string\" value=\"" + fibres + "\"/>" +
+                             "<Parameter name=\"Activation file\" type=\"string\" value=\"" + activation + "\"/>";
+  std::string xml = fibre_bar("stable-neohookean", 0.45, muscle, 2);
+  const std::string direction = R"x(<Parameter name="Fiber direction" type="Array(double)" value="{2.0, 0.0, 0.0}"/>)x";
+  xml.erase(xml.find(direction), direction.size());
+  {
+    Simulation sim(config(xml, "test_results/muscle_csv/run"), RunOptions{true, ""});
+    auto* term = sim.scene().system().find_term<MuscleTerm>();
+    ASSERT_NE(term, nullptr);
+    term->set_load(0.25);
+    EXPECT_NEAR(term->activation(0), 0.3, 1e-12);
+    term->set_load(0.75);
+    EXPECT_NEAR(term->activation(0), 0.4, 1e-12);
+    std::vector<TermState::Nodal> fields;
+    term->element_fields(fields);
+    ASSERT_EQ(fields.size(), 2u);
+    const Mesh& mesh = sim.scene().system().mesh();
+    for (std::size_t e = 0; e < mesh.n_owned_elements; ++e) {
+      EXPECT_EQ(fields[0].values[3 * e + 0], 0.0);
+      EXPECT_EQ(fields[0].values[3 * e + 1], 1.0);  // (0, 1 + e % 3, 0) normalized
+      EXPECT_EQ(fields[0].values[3 * e + 2], 0.0);
+      EXPECT_NEAR(fields[1].values[e], 0.4, 1e-12);
+    }
+  }
+  auto fails_with = [&](const std::string& message) {
+    try {
+      Simulation sim(config(xml, "test_results/muscle_csv/bad"), RunOptions{true, ""});
+      ADD_FAILURE() << "no error; expected " << message;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  write(activation, "t, activation\n0.0, 0.0\n0.5, nan\n");
+  fails_with("activation.csv' line 3: 'nan' is not a finite number");
+  write(activation, "0.0, 0.0\n1.0, 1.0\n");
+  write(fibres, rows.substr(0, rows.find("\n7, ")) + "\n");  // elements 7 and on left out
+  fails_with("fibres.csv' gives no fibre for element 7 of the region");
 }

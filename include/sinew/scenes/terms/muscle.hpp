@@ -29,6 +29,7 @@
 #include <sinew/algebra/terms/muscle.hpp>
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
+#include <sinew/core/xml_input.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/scenes/region.hpp>
 #include <sinew/scenes/skeleton.hpp>
@@ -179,21 +180,23 @@ inline std::vector<std::vector<double>> read_csv(const std::string& path, std::s
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
     std::replace(line.begin(), line.end(), ',', ' ');
     std::istringstream ss(line);
-    std::vector<double> row;
-    std::string item;
-    bool numbers = true;
-    while (ss >> item) {
+    std::vector<std::string> items;
+    for (std::string item; ss >> item;) items.push_back(item);
+    // A first line of words is a header; otherwise every item is a number as the motion file and the
+    // XML take them (core/xml_input.hpp: plain decimal, finite).
+    const auto is_word = [](const std::string& s) {
       char* end = nullptr;
-      const double x = std::strtod(item.c_str(), &end);
-      if (end == item.c_str() || *end != '\0') numbers = false;
-      row.push_back(x);
+      std::strtod(s.c_str(), &end);
+      return end == s.c_str() || *end != '\0';
+    };
+    if (line_no == 1 && std::any_of(items.begin(), items.end(), is_word)) continue;
+    const std::string at = where + ": '" + path + "' line " + std::to_string(line_no) + ": ";
+    if (items.size() != columns) throw InputError(at + "expected " + std::to_string(columns) + " numbers");
+    std::vector<double> row;
+    for (const std::string& item : items) {
+      if (!strict_number(item, false)) throw InputError(at + "'" + item + "' is not a finite number");
+      row.push_back(std::strtod(item.c_str(), nullptr));
     }
-    if (!numbers && rows.empty() && line_no == 1) continue;  // a header
-    if (!numbers || row.size() != columns)
-      throw InputError(where + ": '" + path + "' line " + std::to_string(line_no) + ": expected " + std::to_string(columns) +
-                       " numbers");
-    for (double x : row)
-      if (!std::isfinite(x)) throw InputError(where + ": '" + path + "' line " + std::to_string(line_no) + ": a number is not finite");
     rows.push_back(std::move(row));
   }
   if (rows.empty()) throw InputError(where + ": '" + path + "' holds no line of numbers", InputErrorKind::File);
