@@ -168,11 +168,10 @@ void MuscleTerm::add(const TermInput& in, TermOutput& out) const {
 
 std::array<double, 2> MuscleTerm::stretch_range(std::size_t m) const {
   // A rank holding none of the muscle's owned elements contributes the identities (+inf, -inf).
-  double lo = blocks_[m].min_stretch, hi = -blocks_[m].max_stretch, glo = 0.0, ghi = 0.0;
-  const auto& comm = *comm_;
-  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, lo, Teuchos::outArg(glo));
-  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, hi, Teuchos::outArg(ghi));
-  return {glo, -ghi};
+  const double mine[2] = {blocks_[m].min_stretch, -blocks_[m].max_stretch};
+  double all[2];
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, 2, mine, all);  // both in one: max = -min(-x)
+  return {all[0], -all[1]};
 }
 
 std::vector<std::string> MuscleTerm::log_columns() const {
