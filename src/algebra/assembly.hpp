@@ -4,10 +4,14 @@
 
 #include <sinew/algebra/energy_term.hpp>
 #include <sinew/discretization/element_kernel.hpp>
+#include <sinew/discretization/colouring.hpp>
 #include <sinew/materials/models.hpp>
 
 #include <Tpetra_CrsMatrix_decl.hpp>
 
+#include <algorithm>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 namespace sinew::detail {
@@ -38,8 +42,80 @@ template <class Exec>
 AssemblyTotals assemble_tet4(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
                              const Chunks& chunks, const AssemblyRequest& r);
 
-// With chunks, one launch per colour and plain adds; without (or on a device, where a chunk per thread
-// would leave it idle), one element per work item and atomic adds.
+// The chunk size of the coloured element loops: 32 elements, measured in docs/performance.md
+// (SINEW_ASSEMBLY_CHUNK overrides it for benchmarks; 0 gives one element per work item with atomic adds,
+// the device's way).
+inline int assembly_chunk_size() {
+  int chunk = 32;
+  if (const char* env = std::getenv("SINEW_ASSEMBLY_CHUNK")) chunk = std::max(0, std::atoi(env));
+  return chunk;
+}
+
+// The local elements' nodes on the host, row-major element x node (what the colouring reads).
+inline std::vector<int> host_connectivity(const Mesh& mesh) {
+  auto c = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
+  const int npe = nodes_per_element(mesh.type);
+  std::vector<int> conn(mesh.local_elements() * npe);
+  for (std::size_t e = 0; e < mesh.local_elements(); ++e)
+    for (int a = 0; a < npe; ++a) conn[e * npe + a] = c(e, a);
+  return conn;
+}
+
+inline Kokkos::View<int*> int_view(const std::string& label, const std::vector<int>& v) {
+  Kokkos::View<int*> d(label, v.size());
+  auto h = Kokkos::create_mirror_view(d);
+  for (std::size_t k = 0; k < v.size(); ++k) h(k) = v[k];
+  Kokkos::deep_copy(d, h);
+  return d;
+}
+
+// A list of local elements in the order a loop visits them: in coloured chunks of `chunk` elements
+// (discretization/colouring.hpp; `conn` from host_connectivity), or as given when chunk is 0 (no chunks:
+// one element per work item). elements(k) is ids[position[k]], for data that travels with the elements.
+struct ElementOrder {
+  Kokkos::View<int*> elements, chunks;
+  std::vector<int> colour_begin, position;
+};
+inline ElementOrder order_elements(const std::vector<int>& ids, const Mesh& mesh, const std::vector<int>& conn, int chunk) {
+  ElementOrder o;
+  std::vector<int> order = ids;
+  if (chunk > 0) {
+    ElementChunks c = colour_element_chunks(ids, conn, nodes_per_element(mesh.type), mesh.local_nodes(), chunk);
+    order = c.elements;
+    o.chunks = int_view("element chunks", c.chunk_begin);
+    o.colour_begin = c.colour_begin;
+  }
+  std::vector<int> at(mesh.local_elements(), -1);
+  for (std::size_t k = 0; k < ids.size(); ++k) at[ids[k]] = static_cast<int>(k);
+  for (int e : order) o.position.push_back(at[e]);
+  o.elements = int_view("elements", order);
+  return o;
+}
+
+// Runs an element loop (ElementLoop, or a term's own with the same chunks, chunk_first, target,
+// init and join) over n elements. With chunks, one launch per colour and plain adds; without (or on a
+// device, where a chunk per thread would leave it idle), one element per work item and atomic adds.
+template <class Exec, class Loop>
+typename Loop::value_type run_element_loop(Loop loop, int n, const Chunks& chunks) {
+  constexpr bool host = Kokkos::SpaceAccessibility<Kokkos::HostSpace, typename Exec::memory_space>::accessible;
+  typename Loop::value_type t;
+  if (!host || chunks.offsets.extent(0) == 0) {
+    Kokkos::parallel_reduce("sinew::element_loop", Kokkos::RangePolicy<Exec>(0, n), loop, t);
+    return t;
+  }
+  loop.chunks = chunks.offsets;
+  loop.target.atomic = false;
+  loop.init(t);  // the reduction's identity: the colours' totals are joined here
+  for (std::size_t k = 0; k + 1 < chunks.colour_begin.size(); ++k) {
+    loop.chunk_first = chunks.colour_begin[k];
+    typename Loop::value_type tk;
+    Kokkos::parallel_reduce("sinew::element_loop_coloured", Kokkos::RangePolicy<Exec>(0, chunks.colour_begin[k + 1] - chunks.colour_begin[k]),
+                            loop, tk);
+    loop.join(t, tk);
+  }
+  return t;
+}
+
 template <class Exec, class Element>
 AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, const Kokkos::View<const int*, MemorySpace>& elements,
                              const Chunks& chunks, const AssemblyRequest& r) {
@@ -55,24 +131,7 @@ AssemblyTotals assemble_with(const MaterialSpec& law, Projection projection, con
     loop.want_matrix = r.want_matrix;
     loop.mean_dilatation = law.mean_dilatation;
     loop.fields = r.fields;
-    constexpr bool host = Kokkos::SpaceAccessibility<Kokkos::HostSpace, typename Exec::memory_space>::accessible;
-    if (!host || chunks.offsets.extent(0) == 0) {
-      AssemblyTotals t;
-      Kokkos::parallel_reduce("sinew::element_loop", Kokkos::RangePolicy<Exec>(0, static_cast<int>(elements.extent(0))), loop, t);
-      return t;
-    }
-    loop.chunks = chunks.offsets;
-    loop.target.atomic = false;
-    AssemblyTotals t;
-    loop.init(t);  // the reduction's identity: the colours' totals are joined here
-    for (std::size_t k = 0; k + 1 < chunks.colour_begin.size(); ++k) {
-      loop.chunk_first = chunks.colour_begin[k];
-      AssemblyTotals tk;
-      Kokkos::parallel_reduce("sinew::element_loop_coloured", Kokkos::RangePolicy<Exec>(0, chunks.colour_begin[k + 1] - chunks.colour_begin[k]),
-                              loop, tk);
-      t.add(tk);
-    }
-    return t;
+    return run_element_loop<Exec>(loop, static_cast<int>(elements.extent(0)), chunks);
   });
 }
 

@@ -29,39 +29,14 @@ ElasticTerm::ElasticTerm(const Mesh& mesh, const ElementData& elements, const Ma
       if (mesh_.in_group(e, group)) block_of[e] = static_cast<int>(laws.size());
     laws.push_back(law);
   }
-  // Chunks of 32 elements: measured in docs/performance.md (SINEW_ASSEMBLY_CHUNK overrides it for
-  // benchmarks; 0 gives one element per work item with atomic adds, the device's way).
-  int chunk = 32;
-  if (const char* env = std::getenv("SINEW_ASSEMBLY_CHUNK")) chunk = std::max(0, std::atoi(env));
-  const int npe = nodes_per_element(mesh_.type);
-  std::vector<int> conn;
-  if (chunk > 0) {
-    auto c = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh_.conn);
-    conn.resize(ne * npe);
-    for (std::size_t e = 0; e < ne; ++e)
-      for (int a = 0; a < npe; ++a) conn[e * npe + a] = c(e, a);
-  }
-  auto to_view = [](const std::string& label, const std::vector<int>& v) {
-    Kokkos::View<int*> d(label, v.size());
-    auto h = Kokkos::create_mirror_view(d);
-    for (std::size_t k = 0; k < v.size(); ++k) h(k) = v[k];
-    Kokkos::deep_copy(d, h);
-    return d;
-  };
+  const int chunk = detail::assembly_chunk_size();
+  const std::vector<int> conn = chunk > 0 ? detail::host_connectivity(mesh_) : std::vector<int>{};
   for (std::size_t b = 0; b < laws.size(); ++b) {
     std::vector<int> ids;
     for (std::size_t e = 0; e < ne; ++e)
       if (block_of[e] == static_cast<int>(b)) ids.push_back(static_cast<int>(e));
-    Block blk{laws[b], {}, {}, {}};
-    if (chunk > 0) {
-      ElementChunks chunks = colour_element_chunks(ids, conn, npe, mesh_.local_nodes(), chunk);
-      blk.elements = to_view("block elements", chunks.elements);
-      blk.chunks = to_view("block element chunks", chunks.chunk_begin);
-      blk.colour_begin = chunks.colour_begin;
-    } else {
-      blk.elements = to_view("block elements", ids);
-    }
-    blocks_.push_back(blk);
+    detail::ElementOrder order = detail::order_elements(ids, mesh_, conn, chunk);
+    blocks_.push_back(Block{laws[b], order.elements, order.chunks, order.colour_begin});
   }
 }
 

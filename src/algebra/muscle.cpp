@@ -31,6 +31,9 @@ struct FiberLoop {
   Kokkos::View<const double*, memory_space> u;
   Target target;
   bool want_force = false, want_matrix = false;
+  // Coloured chunks, as ElementLoop's (element_kernel.hpp): work item i is chunk chunk_first + i.
+  Kokkos::View<const int*, memory_space> chunks;
+  int chunk_first = 0;
 
   KOKKOS_INLINE_FUNCTION void init(value_type& t) const { t = FiberTotals(); }
   KOKKOS_INLINE_FUNCTION void join(value_type& a, const value_type& b) const {
@@ -47,6 +50,15 @@ struct FiberLoop {
 #endif
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, value_type& totals) const {
+    if (chunks.extent(0) == 0) {
+      element(i, totals);
+      return;
+    }
+    for (int k = chunks(chunk_first + i); k < chunks(chunk_first + i + 1); ++k) element(k, totals);
+  }
+
+  // Entry i of `elements` (and of `fibers`).
+  KOKKOS_INLINE_FUNCTION void element(const int i, value_type& totals) const {
     constexpr int NPE = Element::nodes, NDOF = 3 * NPE;
     const int e = elements(i);
     int dof[NDOF];
@@ -76,20 +88,13 @@ struct FiberLoop {
   }
 };
 
-template <class Exec, class Element>
-FiberTotals run_fibers(const FiberLoop<Element, detail::Target>& loop, int n) {
-  FiberTotals t;
-  Kokkos::parallel_reduce("sinew::muscle_fibres", Kokkos::RangePolicy<Exec>(0, n), loop, t);
-  return t;
-}
-
 template <class Element>
-FiberTotals dispatch(const FiberLoop<Element, detail::Target>& loop, int n, Backend backend) {
+FiberTotals dispatch(const FiberLoop<Element, detail::Target>& loop, int n, const detail::Chunks& chunks, Backend backend) {
 #if defined(KOKKOS_ENABLE_SERIAL) && defined(KOKKOS_ENABLE_OPENMP)
-  if (backend == Backend::Serial) return run_fibers<Kokkos::Serial>(loop, n);
+  if (backend == Backend::Serial) return detail::run_element_loop<Kokkos::Serial>(loop, n, chunks);
 #endif
   (void)backend;
-  return run_fibers<Kokkos::DefaultExecutionSpace>(loop, n);
+  return detail::run_element_loop<Kokkos::DefaultExecutionSpace>(loop, n, chunks);
 }
 
 }  // namespace
@@ -97,23 +102,24 @@ FiberTotals dispatch(const FiberLoop<Element, detail::Target>& loop, int n, Back
 MuscleTerm::MuscleTerm(Teuchos::RCP<const Teuchos::Comm<int>> comm, const Mesh& mesh, const ElementData& elements,
                        std::vector<MuscleBlock> muscles)
     : comm_(std::move(comm)), mesh_(mesh), elements_(elements) {
+  const int chunk = detail::assembly_chunk_size();
+  const std::vector<int> conn = chunk > 0 ? detail::host_connectivity(mesh) : std::vector<int>{};
   for (auto& m : muscles) {
     if (const std::string why = m.law.invalid(); !why.empty()) throw std::invalid_argument("muscle " + m.name + ": " + why);
     if (m.fibers.size() != m.elements.size()) throw std::invalid_argument("muscle " + m.name + ": one fibre per element");
     if (!m.activation) throw std::invalid_argument("muscle " + m.name + ": no activation");
+    for (const auto& a : m.fibers)
+      if (!(std::fabs(std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) - 1.0) < 1e-9))
+        throw std::invalid_argument("muscle " + m.name + ": a fibre is not a unit vector");
+    detail::ElementOrder order = detail::order_elements(m.elements, mesh, conn, chunk);
     Block b;
-    b.elements = Kokkos::View<int*>("muscle elements", m.elements.size());
+    b.elements = order.elements;
+    b.chunks = order.chunks;
+    b.colour_begin = order.colour_begin;
     b.fibers = Kokkos::View<double* [3]>("muscle fibres", m.elements.size());
-    auto he = Kokkos::create_mirror_view(b.elements);
     auto hf = Kokkos::create_mirror_view(b.fibers);
-    for (std::size_t k = 0; k < m.elements.size(); ++k) {
-      const auto& a = m.fibers[k];
-      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-      if (!(std::fabs(len - 1.0) < 1e-9)) throw std::invalid_argument("muscle " + m.name + ": a fibre is not a unit vector");
-      he(k) = m.elements[k];
-      for (int d = 0; d < 3; ++d) hf(k, d) = a[d];
-    }
-    Kokkos::deep_copy(b.elements, he);
+    for (std::size_t k = 0; k < order.position.size(); ++k)
+      for (int d = 0; d < 3; ++d) hf(k, d) = m.fibers[order.position[k]][d];
     Kokkos::deep_copy(b.fibers, hf);
     b.spec = std::move(m);
     blocks_.push_back(std::move(b));
@@ -154,11 +160,11 @@ void MuscleTerm::add(const TermInput& in, TermOutput& out) const {
     if (hex) {
       FiberLoop<Hex8, detail::Target> loop;
       fill(loop);
-      t = dispatch(loop, n, in.backend);
+      t = dispatch(loop, n, detail::Chunks{b.chunks, b.colour_begin}, in.backend);
     } else {
       FiberLoop<Tet4, detail::Target> loop;
       fill(loop);
-      t = dispatch(loop, n, in.backend);
+      t = dispatch(loop, n, detail::Chunks{b.chunks, b.colour_begin}, in.backend);
     }
     out.energy += t.energy;
     b.min_stretch = t.min_stretch;

@@ -4,7 +4,8 @@
 // fraction t. It adds to the elastic term's isotropic energy of the same elements (the muscle's
 // matrix), on the same element graph, so the Hessian needs no new couplings. The element loop is the
 // elastic one's (discretization/element_kernel.hpp: gather, per-point F, scatter) with the fibre as
-// its "model"; one element per work item with atomic adds, on the default execution space or Serial.
+// its "model"; in coloured chunks on the host, as the elastic term runs (sums independent of the thread
+// count), one element per work item with atomic adds on a device; default execution space or Serial.
 //
 // Where a muscle's fibres point and how its activation follows the load is the scene's business
 // (scenes/terms/muscle.hpp): this term takes them as arrays and a function.
@@ -60,8 +61,10 @@ class MuscleTerm final : public EnergyTerm {
  private:
   struct Block {
     MuscleBlock spec;
-    Kokkos::View<int*> elements;
-    Kokkos::View<double* [3]> fibers;
+    Kokkos::View<int*> elements;       // in coloured chunks, as the elastic term's blocks
+    Kokkos::View<double* [3]> fibers;  // per entry of `elements`
+    Kokkos::View<int*> chunks;         // chunk c is elements [chunks(c), chunks(c + 1)); empty: atomic adds
+    std::vector<int> colour_begin;
     double activation_now = 0.0;
     mutable double min_stretch = 1.0, max_stretch = 1.0;  // this rank's owned points, last evaluation
   };
