@@ -367,6 +367,12 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     return stats;
   }
   gather_surface(at);
+  if (tied_.empty()) {  // the attachments' nodes (they are set up after this term)
+    std::vector<char> tied(surface_.vertices(), 0);
+    bool any = false;
+    for (std::size_t v = 0; v < surface_.vertices(); ++v) any = (tied[v] = system_.tied(surface_.gid[v])) || any;
+    if (any) tied_ = std::move(tied);
+  }
   // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
   // inside test cannot tell it more).
   std::vector<char> paired(surface_.vertices(), 0);
@@ -435,6 +441,9 @@ void ContactTerm::gather_surface(Positions& at) const {
 }
 
 bool ContactTerm::excluded(int t, int v) const {
+  // Attached surfaces (System::tie_nodes) are the attachment's: a tied sample, or a face of tied nodes.
+  if (!tied_.empty() && (tied_[v] || (tied_[surface_.triangles[t][0]] && tied_[surface_.triangles[t][1]] && tied_[surface_.triangles[t][2]])))
+    return true;
   for (int m : surface_.triangles[t])
     if (surface_.in_ring(v, surface_.gid[m])) return true;
   return false;
@@ -483,7 +492,7 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
   // Every sample, kept pairs included: a kept spring whose target has slid away while its sample went
   // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
-    if (paired[v] == 2) continue;
+    if (paired[v] == 2 || (!tied_.empty() && tied_[v])) continue;
     bool inside = false;
     Vec Xref{};
     element_tree.at_point(x[v], [&](int e) {

@@ -85,6 +85,12 @@ class System {
   void set_body_force(const std::array<double, 3>& force_per_reference_volume);
   void set_gravity(const std::array<double, 3>& acceleration);
 
+  // Surface nodes a term ties to another surface (an attachment's samples and targets, global ids; every
+  // rank passes the same): self contact neither samples them nor pushes on faces made of them, since
+  // the two sides of an attached interface touch at rest.
+  void tie_nodes(const std::vector<GlobalId>& nodes) { tied_.insert(nodes.begin(), nodes.end()); }
+  bool tied(GlobalId g) const { return tied_.count(g) != 0; }
+
   // Terms beyond the elastic energy and the external forces (which every system has), summed in the
   // order added. Their names must differ (they name log columns and checkpoint records).
   void add_term(std::shared_ptr<EnergyTerm> term);
@@ -195,6 +201,7 @@ class System {
   Teuchos::RCP<const CrsGraph> graph_, mesh_graph_;
   Teuchos::RCP<Vector> u_columns_;
   std::set<std::pair<GlobalId, GlobalId>> extra_;  // couplings beyond the mesh graph (owned row node, column node)
+  std::set<GlobalId> tied_;
   unsigned pattern_version_ = 0;
   Kokkos::View<char*> fixed_;  // per column DOF
   std::vector<int> fixed_owned_;

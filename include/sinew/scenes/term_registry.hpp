@@ -6,11 +6,12 @@
 
 #include <sinew/scenes/contact.hpp>
 #include <sinew/scenes/term_kind.hpp>
+#include <sinew/scenes/terms/attachment.hpp>
 #include <sinew/scenes/terms/muscle.hpp>
 #include <sinew/scenes/terms/pressure.hpp>
 
 namespace sinew {
 
-using SceneTerms = TermKinds<Contact, PressureLoads, Muscles>;
+using SceneTerms = TermKinds<Contact, PressureLoads, Muscles, Attachments>;
 
 }  // namespace sinew

@@ -210,6 +210,7 @@ class ContactTerm final : public EnergyTerm {
   long long global_pairs_ = 0;
   int rank_ = 0;
   mutable std::vector<double> pressure_;
+  std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
 };
 
 }  // namespace sinew

@@ -1,0 +1,199 @@
+// Attachments between bodies (two blocks meshed apart, non-matching at their interface): the term's
+// energy, gradient and Hessian against finite differences with raised tractions and turned frames
+// (PSD); a sliding block pulled along its interface carries no tangential force and keeps the gap
+// closed; a fixed one moves with the block below to 1e-10; self contact leaves an attached interface
+// alone. 1 thread, 2 threads and 2 ranks.
+#include "scene_test_utils.hpp"
+#include "system_test_utils.hpp"
+
+#include <sinew/algebra/terms/attachment.hpp>
+#include <sinew/algebra/terms/contact.hpp>
+#include <sinew/driver/run.hpp>
+#include <sinew/scenes/scene.hpp>
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Tpetra_Core.hpp>
+#include <Tpetra_Vector.hpp>
+#include <gtest/gtest.h>
+
+#include <string>
+
+using namespace sinew;
+using namespace sinew::test;
+
+namespace {
+
+auto world() { return Tpetra::getDefaultComm(); }
+
+const std::string meshes = std::string(SINEW_SOURCE_DIR) + "/tests/meshes/";
+
+// The blocks of meshes/stacked_blocks.geo: the lower one's bottom held, the upper one's top moved by
+// `pull` (all three components prescribed); the upper block's bottom attached to the lower's top.
+std::string stacked(const std::string& type, const std::string& pull, const std::string& extra = "", int steps = 4) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="stacked_blocks"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="file"/>
+    <Parameter name="File" type="string" value=")x" + meshes + R"x(stacked_blocks.msh"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1000"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Attachments">
+    <ParameterList name="interface">
+      <Parameter name="Type" type="string" value=")x" + type + R"x("/>
+      <Parameter name="Region" type="string" value="group upper bottom"/>
+      <Parameter name="Target" type="string" value="group lower top"/>
+      <Parameter name="Distance" type="double" value="1.0e-6"/>
+      <Parameter name="Tolerance" type="double" value="1.0e-11"/>
+      <Parameter name="Maximum rounds" type="int" value="20"/>
+    </ParameterList>
+  </ParameterList>
+  )x" + extra + R"x(
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value=")x" + std::to_string(steps) + R"x("/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="bottom"><Parameter name="Region" type="string" value="group bottom"/></ParameterList>
+      <ParameterList name="pull">
+        <Parameter name="Region" type="string" value="group top"/>
+        <Parameter name="Motion" type="string" value="translate"/>
+        <Parameter name="Displacement" type="Array(double)" value=")x" + pull + R"x("/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Solver">
+    <Parameter name="Absolute tolerance" type="double" value="1.0e-11"/>
+  </ParameterList>
+  )x" + logs_only_output() + R"x(
+</ParameterList>)x";
+}
+
+// The reaction at the pulled face (the force the prescribed motion exerts there), over all ranks.
+std::array<double, 3> pull_reaction(Simulation& sim) {
+  const System& sys = sim.scene().system();
+  auto f = sys.create_vector();
+  sys.gradient(sim.displacement(), *f);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  auto fv = f->getLocalViewHost(Tpetra::Access::ReadOnly);
+  double mine[3] = {0, 0, 0}, all[3];
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n)
+    if (X(n, 2) > 1.0 - 1e-12)
+      for (int c = 0; c < 3; ++c) mine[c] += fv(3 * n + c, 0);
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_SUM, 3, mine, all);
+  return {all[0], all[1], all[2]};
+}
+
+}  // namespace
+
+// The term's energy, gradient and Hessian at a random state, after a round has raised the tractions
+// and refrozen the frames (fixed) and normals and targets (sliding) at another: the directional
+// derivative equals the energy's central difference, H d the gradient's, and H is PSD.
+TEST(Attachments, TheTermsGradientAndHessianMatchFiniteDifferencesAndArePositiveSemiDefinite) {
+  for (const char* type : {"fixed", "sliding"}) {
+    Simulation sim(config(stacked(type, "{0.1, 0, 0}"), std::string("test_results/attachment_fd_") + type), RunOptions{true, ""});
+    System& sys = sim.scene().system();
+    auto* term = sys.find_term<AttachmentTerm>();
+    ASSERT_NE(term, nullptr);
+    EXPECT_EQ(term->pairs().size(), 16u) << type;  // the upper block's 4 x 4 bottom nodes
+    auto u0 = sys.create_vector(), u1 = sys.create_vector(), u = sys.create_vector(), d = sys.create_vector();
+    u0->putScalar(0.0);
+    sys.round(*u0, 0);
+    // A state that turns and shifts the interface: the round raises the tractions and refreezes there.
+    set_displacement(sys, *u1, [](const std::array<double, 3>& X, int i, long long gid) {
+      return 0.03 * hash_unit(gid, i, 3) + (i == 0 ? 0.2 * X[2] : i == 2 ? -0.15 * X[0] : 0.0);
+    });
+    sys.round(*u1, 1);
+    double lambda = 0.0;
+    for (const auto& p : term->pairs()) lambda = std::max(lambda, std::fabs(p.lambda[0]) + std::fabs(p.lambda[2]));
+    EXPECT_GT(lambda, 1.0) << type;
+    set_displacement(sys, *u, [](const std::array<double, 3>&, int i, long long gid) { return 0.05 * hash_unit(gid, i); });
+    set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
+    auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
+    term_energy(sys, *term, *u, f.get());
+    const double h = 1e-6;
+    auto up = sys.create_vector(), um = sys.create_vector();
+    up->update(1.0, *u, h, *d, 0.0);
+    um->update(1.0, *u, -h, *d, 0.0);
+    const double dE = (term_energy(sys, *term, *up, fp.get()) - term_energy(sys, *term, *um, fm.get())) / (2.0 * h);
+    const double fd_dot = f->dot(*d);
+    EXPECT_NEAR(fd_dot, dE, 1e-7 * std::max(1.0, std::fabs(dE))) << type;
+    const auto H = term_hessian(sys, *term, *u);
+    const auto dg = gather(*d), fpg = gather(*fp), fmg = gather(*fm);
+    double err = 0.0, scale = 0.0;
+    for (std::size_t r = 0; r < H.size(); ++r) {
+      double Hd = 0.0;
+      for (std::size_t c = 0; c < H.size(); ++c) Hd += H[r][c] * dg[c];
+      const double fd = (fpg[r] - fmg[r]) / (2.0 * h);
+      err = std::max(err, std::fabs(Hd - fd));
+      scale = std::max(scale, std::fabs(fd));
+    }
+    EXPECT_GT(scale, 1.0) << type;
+    EXPECT_LT(err, 1e-7 * scale) << type;
+    const double lo = min_eigenvalue(H);
+    EXPECT_GE(lo, -1e-12 * max_abs(H)) << type;
+    if (world()->getRank() == 0)
+      std::printf("[ info ] %s: dE/dd %.9e vs f.d %.9e; |H d - FD| %.2e of %.2e; min eigenvalue %.2e of %.2e\n", type, dE, fd_dot,
+                  err, scale, lo, max_abs(H));
+  }
+}
+
+// The upper block's top pulled along the interface: sliding, the block slides and the pull meets no
+// tangential force (below 1e-8 of the fixed attachment's, which shears both blocks); the normal gap
+// stays closed; fixed, the upper block's bottom moves with the lower block's top to 1e-10.
+TEST(Attachments, ASlidingBlockCarriesNoTangentialForceAndAFixedOneMovesWithItsBase) {
+  Simulation fixed(config(stacked("fixed", "{0.1, 0.05, 0}"), "test_results/attachment_fixed"), RunOptions{true, ""});
+  ASSERT_EQ(fixed.run(), 0);
+  Simulation sliding(config(stacked("sliding", "{0.1, 0.05, 0}"), "test_results/attachment_sliding"), RunOptions{true, ""});
+  ASSERT_EQ(sliding.run(), 0);
+  const auto rf = pull_reaction(fixed), rs = pull_reaction(sliding);
+  const double pull = std::hypot(rf[0], rf[1]), tangential = std::hypot(rs[0], rs[1]);
+  const double gap_fixed = fixed.scene().system().find_term<AttachmentTerm>()->largest_gaps(fixed.displacement())[0];
+  const double gap_sliding = sliding.scene().system().find_term<AttachmentTerm>()->largest_gaps(sliding.displacement())[0];
+  if (world()->getRank() == 0)
+    std::printf("[ info ] pull (0.1, 0.05, 0): tangential reaction fixed %.6e, sliding %.3e (ratio %.2e); largest gap fixed %.2e, "
+                "sliding (normal) %.2e\n",
+                pull, tangential, tangential / pull, gap_fixed, gap_sliding);
+  EXPECT_GT(pull, 1.0);  // the fixed attachment shears the blocks
+  EXPECT_LT(tangential, 1e-8 * pull);
+  EXPECT_LT(gap_fixed, 1e-10);
+  EXPECT_LT(gap_sliding, 1e-10);
+  // Fixed: every sample's displacement is its target point's (the surfaces touch at rest).
+  const System& sys = fixed.scene().system();
+  const auto* term = sys.find_term<AttachmentTerm>();
+  const auto u = gather(fixed.displacement());
+  double worst = 0.0, moved = 0.0;
+  for (const auto& p : term->pairs()) {
+    const auto& t = term->surface().triangles[p.triangle];
+    for (int c = 0; c < 3; ++c) {
+      double q = 0.0;
+      for (int j = 0; j < 3; ++j) q += p.beta[j] * u[3 * term->surface().gid[t[j]] + c];
+      worst = std::max(worst, std::fabs(u[3 * term->surface().gid[p.vertex] + c] - q));
+      moved = std::max(moved, std::fabs(q));
+    }
+  }
+  EXPECT_GT(moved, 1e-3);
+  EXPECT_LT(worst, 1e-10);
+  // Sliding: the upper block slid rigidly (its bottom moved by the pull).
+  const auto us = gather(sliding.displacement());
+  const auto* ts = sliding.scene().system().find_term<AttachmentTerm>();
+  for (const auto& p : ts->pairs()) {
+    EXPECT_NEAR(us[3 * ts->surface().gid[p.vertex]], 0.1, 1e-9);
+    EXPECT_NEAR(us[3 * ts->surface().gid[p.vertex] + 1], 0.05, 1e-9);
+  }
+}
+
+// Self contact on: the attached interface touches at rest, yet contact pairs none of its nodes (the
+// attachment holds them), and the sliding run gives the same state as without contact.
+TEST(Attachments, SelfContactLeavesAnAttachedInterfaceAlone) {
+  const std::string contact = R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>)x";
+  Simulation with(config(stacked("sliding", "{0.1, 0.05, 0}", contact, 2), "test_results/attachment_contact"), RunOptions{true, ""});
+  ASSERT_EQ(with.run(), 0);
+  Simulation without(config(stacked("sliding", "{0.1, 0.05, 0}", "", 2), "test_results/attachment_no_contact"), RunOptions{true, ""});
+  ASSERT_EQ(without.run(), 0);
+  const auto* c = with.scene().system().find_term<ContactTerm>();
+  ASSERT_NE(c, nullptr);
+  EXPECT_EQ(c->global_pairs(), 0);
+  EXPECT_LT(rel_diff(gather(with.displacement()), gather(without.displacement())), 1e-9);
+}
