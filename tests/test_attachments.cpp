@@ -197,3 +197,67 @@ TEST(Attachments, SelfContactLeavesAnAttachedInterfaceAlone) {
   EXPECT_EQ(c->global_pairs(), 0);
   EXPECT_LT(rel_diff(gather(with.displacement()), gather(without.displacement())), 1e-9);
 }
+
+// Two blocks 0.1 apart (meshes/two_blocks.msh), the upper one free and held by a fixed attachment
+// across the gap, the lower one's bottom turned by 40 degrees about x: the upper block turns with it
+// rigidly (its offset across the gap turns with the target's frame), to 1e-8 of the motion.
+TEST(Attachments, AFixedAttachmentAcrossAGapTurnsItsOffsetWithTheTarget) {
+  const double angle = 0.698132;  // 40 degrees, as the XML spells it
+  const std::string xml = R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="turned_blocks"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="file"/>
+    <Parameter name="File" type="string" value=")x" + meshes + R"x(two_blocks.msh"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1000"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Attachments">
+    <ParameterList name="across">
+      <Parameter name="Region" type="string" value="group upper"/>
+      <Parameter name="Target" type="string" value="group lower"/>
+      <Parameter name="Distance" type="double" value="0.15"/>
+      <Parameter name="Tolerance" type="double" value="1.0e-11"/>
+      <Parameter name="Maximum rounds" type="int" value="30"/>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Loading">
+    <Parameter name="Steps" type="int" value="4"/>
+    <ParameterList name="Boundary conditions">
+      <ParameterList name="bottom">
+        <Parameter name="Region" type="string" value="group bottom"/>
+        <Parameter name="Motion" type="string" value="rotate"/>
+        <Parameter name="Axis" type="Array(double)" value="{1, 0, 0}"/>
+        <Parameter name="Center" type="Array(double)" value="{0.5, 0.5, 0}"/>
+        <Parameter name="Angle" type="double" value=")x" + std::to_string(angle) + R"x("/>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Solver">
+    <Parameter name="Absolute tolerance" type="double" value="1.0e-10"/>
+  </ParameterList>
+  )x" + logs_only_output() + R"x(
+</ParameterList>)x";
+  Simulation sim(config(xml, "test_results/attachment_turned"), RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const System& sys = sim.scene().system();
+  const auto* term = sys.find_term<AttachmentTerm>();
+  ASSERT_NE(term, nullptr);
+  EXPECT_EQ(term->pairs().size(), 25u);  // the upper block's bottom face, 5 x 5 nodes, 0.1 above the lower's top
+  const auto u = gather(sim.displacement());
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  // The rigid motion of every node: x = c + R (X - c), R about x through c = (0.5, 0.5, 0).
+  const double c = std::cos(angle), s = std::sin(angle);
+  double mine = 0.0, worst = 0.0;
+  for (std::size_t n = 0; n < sys.mesh().n_owned_nodes; ++n) {
+    const double y = X(n, 1) - 0.5, z = X(n, 2);
+    const double rigid[3] = {0.0, c * y - s * z - y, s * y + c * z - z};
+    const auto g = static_cast<std::size_t>(sys.mesh().node_gid[n]);
+    for (int k = 0; k < 3; ++k) mine = std::max(mine, std::fabs(u[3 * g + k] - rigid[k]));
+  }
+  Teuchos::reduceAll(*world(), Teuchos::REDUCE_MAX, mine, Teuchos::outArg(worst));
+  if (world()->getRank() == 0) std::printf("[ info ] turned 40 degrees: largest distance from the rigid motion %.2e\n", worst);
+  EXPECT_LT(worst, 1e-8 * 2.1);  // 2.1: the reach of the upper block's top from the axis
+}

@@ -27,9 +27,9 @@ struct Frame {
 };
 Frame frame_of(const Vec& a, const Vec& b, const Vec& c) {
   Frame f;
-  f.e[0] = geom::normalized(b - a);
-  f.e[2] = geom::normalized(geom::cross(b - a, c - a));
-  f.e[1] = geom::cross(f.e[2], f.e[0]);
+  f.e[0] = normalized(b - a);
+  f.e[2] = normalized(cross(b - a, c - a));
+  f.e[1] = cross(f.e[2], f.e[0]);
   return f;
 }
 
@@ -86,7 +86,7 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
         if (excluded(tris[i], static_cast<int>(v))) return HUGE_VAL;
         double w[3];
         const auto& t = T[tris[i]];
-        return geom::distance2(x, geom::closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], w));
+        return distance2(x, closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], w));
       };
       double best2 = 0.0;
       const int i = tree.closest(x, limit2 * (1.0 + 1e-12), d2, best2);
@@ -101,18 +101,20 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
       p.triangle = tris[i];
       p.area = surface_.area[v];
       const auto& t = T[p.triangle];
-      const Vec q = geom::closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], p.beta);
+      const Vec q = closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], p.beta);
       const Frame f = frame_of(surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]]);
       const Vec r = x - q;
       if (spec.kind == AttachmentKind::Fixed) {
         for (int d = 0; d < 3; ++d) {
-          p.rest[d] = geom::dot(r, f.e[d]);
+          p.rest[d] = dot(r, f.e[d]);
           p.frozen[d] = r[d];
         }
       } else {
-        p.rest[0] = geom::dot(r, f.e[2]);
+        p.rest[0] = dot(r, f.e[2]);
         for (int d = 0; d < 3; ++d) p.frozen[d] = f.e[2][d];
       }
+      p.rest_triangle = p.triangle;
+      std::copy(p.beta, p.beta + 3, p.rest_beta);
       taken[v] = 1;
       pairs_.push_back(p);
     }
@@ -128,9 +130,19 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
     }
   }
   system_.tie_nodes(tied);
-  committed_ = pairs_;
   last_gap_.assign(specs_.size(), 0.0);
+  last_slide_.assign(specs_.size(), 0.0);
   moved_.assign(specs_.size(), 0);
+  // The rest normal gap along the normal a round freezes (interpolated), so that rest is g = 0.
+  int moved = 0;
+  freeze(surface_.X, moved);
+  std::fill(moved_.begin(), moved_.end(), 0);
+  for (Pair& p : pairs_)
+    if (specs_[p.spec].kind == AttachmentKind::Sliding) {
+      p.rest[0] = 0.0;
+      p.rest[0] = gap(p, surface_.X)[0];
+    }
+  committed_ = pairs_;
 }
 
 bool AttachmentTerm::excluded(int t, int v) const {
@@ -255,19 +267,30 @@ Vec AttachmentTerm::gap(const Pair& p, const std::vector<Vec>& x) const {
   const Vec d = x[p.vertex] - (p.beta[0] * x[t[0]] + p.beta[1] * x[t[1]] + p.beta[2] * x[t[2]]);
   const Vec frozen{p.frozen[0], p.frozen[1], p.frozen[2]};
   if (specs_[p.spec].kind == AttachmentKind::Fixed) return d - frozen;
-  return {geom::dot(d, frozen) - p.rest[0], 0.0, 0.0};
+  return {dot(d, frozen) - p.rest[0], 0.0, 0.0};
 }
 
 void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
   const auto& T = surface_.triangles;
   // Sliding samples move to the closest point of their deformed target surface, searched near the
   // current target (within twice the farther of the attachment distance and the sample's distance).
+  // The normal is interpolated from the target's area-weighted vertex normals (Phong's), so that it
+  // turns continuously as a sample slides over an edge or a vertex of a faceted curved surface: with
+  // the faces' own normals a sample at a vertex flips between planes from one round to the next.
   std::vector<AabbTree> trees(specs_.size());
+  std::vector<std::vector<Vec>> vertex_normal(specs_.size());
   for (std::size_t s = 0; s < specs_.size(); ++s) {
     if (specs_[s].kind != AttachmentKind::Sliding) continue;
     std::vector<Box> boxes(target_triangles_[s].size());
-    for (std::size_t i = 0; i < boxes.size(); ++i)
-      for (int m : T[target_triangles_[s][i]]) boxes[i].add(x[m]);
+    vertex_normal[s].assign(surface_.vertices(), Vec{0.0, 0.0, 0.0});
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const auto& t = T[target_triangles_[s][i]];
+      const Vec n2 = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);  // twice the area times the normal
+      for (int m : t) {
+        boxes[i].add(x[m]);
+        vertex_normal[s][m] = vertex_normal[s][m] + n2;
+      }
+    }
     trees[s].build(boxes);
   }
   for (Pair& p : pairs_) {
@@ -276,29 +299,34 @@ void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
       const auto& tris = target_triangles_[p.spec];
       const Vec& xs = x[p.vertex];
       const auto& t0 = T[p.triangle];
-      const double now = geom::norm(xs - (p.beta[0] * x[t0[0]] + p.beta[1] * x[t0[1]] + p.beta[2] * x[t0[2]]));
+      const double now = norm(xs - (p.beta[0] * x[t0[0]] + p.beta[1] * x[t0[1]] + p.beta[2] * x[t0[2]]));
       const double limit = 2.0 * std::max(spec.distance, now) + 1e-12;
       double best2 = 0.0;
       const int i = trees[p.spec].closest(xs, limit * limit, [&](int k) {
         if (excluded(tris[k], p.vertex)) return HUGE_VAL;
         double w[3];
         const auto& t = T[tris[k]];
-        return geom::distance2(xs, geom::closest_on_triangle(xs, x[t[0]], x[t[1]], x[t[2]], w));
+        return distance2(xs, closest_on_triangle(xs, x[t[0]], x[t[1]], x[t[2]], w));
       }, best2);
       if (i >= 0) {
         // Ties go to the current triangle: a sample on a shared edge stays where it was.
         double w[3];
-        const double here = geom::distance2(xs, geom::closest_on_triangle(xs, x[t0[0]], x[t0[1]], x[t0[2]], w));
+        const double here = distance2(xs, closest_on_triangle(xs, x[t0[0]], x[t0[1]], x[t0[2]], w));
         if (tris[i] != p.triangle && best2 < here * (1.0 - 1e-12)) {
           p.triangle = tris[i];
           ++moved;
           ++moved_[p.spec];
         }
         const auto& t = T[p.triangle];
-        geom::closest_on_triangle(xs, x[t[0]], x[t[1]], x[t[2]], p.beta);
+        closest_on_triangle(xs, x[t[0]], x[t[1]], x[t[2]], p.beta);
       }
       const auto& t = T[p.triangle];
-      const Vec n = frame_of(x[t[0]], x[t[1]], x[t[2]]).e[2];
+      const auto& N = vertex_normal[p.spec];
+      Vec n = normalized(p.beta[0] * normalized(N[t[0]]) + p.beta[1] * normalized(N[t[1]]) + p.beta[2] * normalized(N[t[2]]));
+      if (norm(n) == 0.0) n = frame_of(x[t[0]], x[t[1]], x[t[2]]).e[2];
+      // A traction belongs to its direction: one whose normal turned by more than 30 degrees (a sample
+      // that slid round a bend of a coarse surface) starts again from zero rather than push sideways.
+      if (dot(n, Vec{p.frozen[0], p.frozen[1], p.frozen[2]}) < std::cos(M_PI / 6.0)) p.lambda[0] = 0.0;
       for (int d = 0; d < 3; ++d) p.frozen[d] = n[d];
     } else {
       const auto& t = T[p.triangle];
@@ -311,25 +339,36 @@ void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
 RoundResult AttachmentTerm::round(const Vector& u, int round) {
   const std::vector<Vec> x = positions(u);
   if (round == 0) std::fill(moved_.begin(), moved_.end(), 0);
-  if (round > 0)  // Uzawa: the traction that holds the converged state's gap, before refreezing
+  // The gap the solve just converged to, against what it held frozen: what the multipliers take up
+  // (Uzawa) and what decides another solve. Refreezing then measures the gap against the target as it
+  // now stands: a fixed pair's offset turned with its target's frame asks for another solve; a sliding
+  // sample's slide round a bend is reported and the next solve works on it, but it alone asks for
+  // none: on a coarse curved surface a sample sliding under a large traction would chase its own
+  // tangent planes from round to round.
+  std::vector<double> solved(specs_.size(), 0.0);
+  if (round > 0)
     for (Pair& p : pairs_) {
       const Vec g = gap(p, x);
+      solved[p.spec] = std::max(solved[p.spec], norm(g));
       const double k = specs_[p.spec].stiffness;
       for (int d = 0; d < 3; ++d) p.lambda[d] += k * g[d];
     }
   int moved = 0;
   freeze(x, moved);
   std::fill(last_gap_.begin(), last_gap_.end(), 0.0);
-  for (const Pair& p : pairs_) last_gap_[p.spec] = std::max(last_gap_[p.spec], geom::norm(gap(p, x)));
+  for (const Pair& p : pairs_) last_gap_[p.spec] = std::max(last_gap_[p.spec], norm(gap(p, x)));
+  last_slide_ = slides(x);
   RoundResult r;
   if (round == 0) return r;
   bool open = false;
   std::string worst;
-  for (std::size_t s = 0; s < specs_.size(); ++s)
-    if (last_gap_[s] > specs_[s].tolerance) {
+  for (std::size_t s = 0; s < specs_.size(); ++s) {
+    const double g = specs_[s].kind == AttachmentKind::Fixed ? std::max(solved[s], last_gap_[s]) : solved[s];
+    if (g > specs_[s].tolerance) {
       open = true;
-      worst += (worst.empty() ? "" : ", ") + specs_[s].name + " " + format_gap(last_gap_[s]) + " > " + format_gap(specs_[s].tolerance);
+      worst += (worst.empty() ? "" : ", ") + specs_[s].name + " " + format_gap(g) + " > " + format_gap(specs_[s].tolerance);
     }
+  }
   r.again = open && round < rounds_;
   if (open)
     r.line = "attachments, round " + std::to_string(round) + ": gap " + worst +
@@ -340,9 +379,27 @@ RoundResult AttachmentTerm::round(const Vector& u, int round) {
 std::vector<double> AttachmentTerm::largest_gaps(const Vector& u) const {
   const std::vector<Vec> x = positions(u);
   std::vector<double> g(specs_.size(), 0.0);
-  for (const Pair& p : pairs_) g[p.spec] = std::max(g[p.spec], geom::norm(gap(p, x)));
+  for (const Pair& p : pairs_) g[p.spec] = std::max(g[p.spec], norm(gap(p, x)));
   return g;
 }
+
+std::vector<double> AttachmentTerm::slides(const std::vector<Vec>& x) const {
+  const auto& T = surface_.triangles;
+  std::vector<double> out(specs_.size(), 0.0);
+  for (const Pair& p : pairs_) {
+    const auto& t = T[p.rest_triangle];
+    const Vec now = x[p.vertex] - (p.rest_beta[0] * x[t[0]] + p.rest_beta[1] * x[t[1]] + p.rest_beta[2] * x[t[2]]);
+    // A fixed pair's offset turns with its target (R r0): its slide is its gap.
+    const Vec rest = specs_[p.spec].kind == AttachmentKind::Fixed
+                         ? Vec{p.frozen[0], p.frozen[1], p.frozen[2]}
+                         : surface_.X[p.vertex] - (p.rest_beta[0] * surface_.X[t[0]] + p.rest_beta[1] * surface_.X[t[1]] +
+                                                   p.rest_beta[2] * surface_.X[t[2]]);
+    out[p.spec] = std::max(out[p.spec], norm(now - rest));
+  }
+  return out;
+}
+
+std::vector<double> AttachmentTerm::largest_slides(const Vector& u) const { return slides(positions(u)); }
 
 void AttachmentTerm::end_step(const Vector&) { committed_ = pairs_; }
 void AttachmentTerm::abandon_step() { pairs_ = committed_; }
@@ -388,11 +445,21 @@ void AttachmentTerm::load_state(const TermState& state) {
 
 std::vector<std::string> AttachmentTerm::log_columns() const {
   std::vector<std::string> c;
-  for (const auto& s : specs_) c.push_back("attachment_gap_" + s.name);
+  for (const auto& s : specs_) {
+    c.push_back("attachment_gap_" + s.name);
+    c.push_back("attachment_slide_" + s.name);
+  }
   return c;
 }
 
-std::vector<double> AttachmentTerm::log_values(const EvaluationTotals&) const { return last_gap_; }
+std::vector<double> AttachmentTerm::log_values(const EvaluationTotals&) const {
+  std::vector<double> v;
+  for (std::size_t s = 0; s < specs_.size(); ++s) {
+    v.push_back(last_gap_[s]);
+    v.push_back(last_slide_[s]);
+  }
+  return v;
+}
 
 std::vector<std::string> AttachmentTerm::summary(const EvaluationTotals&) const {
   std::vector<std::string> lines;
@@ -406,9 +473,9 @@ std::vector<std::string> AttachmentTerm::summary(const EvaluationTotals&) const 
           force[d] += p.area * (specs_[s].kind == AttachmentKind::Fixed ? p.lambda[d] : p.lambda[0] * p.frozen[d]);
       }
     char buf[256];
-    std::snprintf(buf, sizeof buf, "attachment %s (%s): %lld pairs, largest gap %.3g, force (%.3g, %.3g, %.3g)%s",
+    std::snprintf(buf, sizeof buf, "attachment %s (%s): %lld pairs, largest gap %.3g, largest slide %.3g, force (%.3g, %.3g, %.3g)%s",
                   specs_[s].name.c_str(), specs_[s].kind == AttachmentKind::Fixed ? "fixed" : "sliding", n, last_gap_[s],
-                  force[0], force[1], force[2],
+                  last_slide_[s], force[0], force[1], force[2],
                   moved_[s] > 0 ? (", " + std::to_string(moved_[s]) + " targets slid to a neighbour").c_str() : "");
     lines.push_back(buf);
   }

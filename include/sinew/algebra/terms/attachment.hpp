@@ -80,6 +80,8 @@ class AttachmentTerm final : public EnergyTerm {
     double frozen[3] = {0, 0, 0};            // fixed: R r0 at the last freeze; sliding: the normal n
     double lambda[3] = {0, 0, 0};            // fixed: the traction vector; sliding: lambda[0]
     double area = 0.0;                       // A_s
+    int rest_triangle = 0;                   // the target at rest, and its weights: what the sample
+    double rest_beta[3] = {0, 0, 0};         // touched then (the slide is measured from it)
   };
   // Every pair, the same on every rank.
   const std::vector<Pair>& pairs() const { return pairs_; }
@@ -87,6 +89,9 @@ class AttachmentTerm final : public EnergyTerm {
   const SurfaceMesh& surface() const { return surface_; }
   // Collective: per attachment, the largest |gap| at u (owned DOFs) with the frozen frames and targets.
   std::vector<double> largest_gaps(const Vector& u) const;
+  // Collective: per attachment, the largest slide at u: how far a sample moved relative to the target
+  // point it touched at rest (a fixed attachment's is its gap; a sliding one's, the tangential travel).
+  std::vector<double> largest_slides(const Vector& u) const;
 
  private:
   std::vector<geom::Vec> positions(const Vector& u) const;  // every surface vertex at u (collective)
@@ -102,7 +107,8 @@ class AttachmentTerm final : public EnergyTerm {
   SurfaceMesh surface_;
   std::vector<std::vector<int>> target_triangles_;  // per spec: surface triangles of its target
   std::vector<Pair> pairs_, committed_;
-  std::vector<double> last_gap_;  // per spec, at the last round
+  std::vector<double> last_gap_, last_slide_;  // per spec, at the last round
+  std::vector<double> slides(const std::vector<geom::Vec>& x) const;
   std::vector<long long> moved_;  // per spec: sliding targets moved to another triangle in this step
   Teuchos::RCP<const Map> columns_;
 };

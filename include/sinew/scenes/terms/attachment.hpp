@@ -58,7 +58,7 @@ struct AttachmentParameters {
             "penalty k: traction per unit of gap (0: 10 (mu_L + lambda_L) / h, as contact's, h the mean edge length)",
             Range::non_negative());
     v.entry("Tolerance", tolerance, 0.0,
-            "the gap each step closes to: the tractions are raised between solves until no gap exceeds it (0: h / 1000)",
+            "the gap each step closes to: the tractions are raised between solves until no gap exceeds it (0: h / 100)",
             Range::non_negative());
     v.entry("Maximum rounds", rounds, 10, "solves per step at most while a gap exceeds the tolerance", Range::closed(1, 100));
   }
@@ -121,7 +121,7 @@ struct Attachments {
       s.targets = global_nodes(target, where + " 'Target'");
       s.distance = a.distance;
       s.stiffness = a.stiffness > 0.0 ? a.stiffness : 10.0 * sys.stiffness_scale() / h;
-      s.tolerance = a.tolerance > 0.0 ? a.tolerance : 1e-3 * h;
+      s.tolerance = a.tolerance > 0.0 ? a.tolerance : 1e-2 * h;
       rounds = std::max(rounds, a.rounds);
       specs.push_back(std::move(s));
     }
