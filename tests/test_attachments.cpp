@@ -7,6 +7,7 @@
 #include "system_test_utils.hpp"
 
 #include <sinew/algebra/terms/attachment.hpp>
+#include <sinew/algebra/terms/bone_springs.hpp>
 #include <sinew/algebra/terms/contact.hpp>
 #include <sinew/driver/run.hpp>
 #include <sinew/scenes/scene.hpp>
@@ -348,4 +349,98 @@ TEST(Attachments, ARestartContinuesWithTheTractions) {
                 "first residual %.6e (uninterrupted %.6e)\n",
                 du, dl, scale, b3, a3);
   }
+}
+
+namespace {
+
+// A 3 x 3 x 4 box twisted by a bone: its bottom held by a root bone, its top turned 60 degrees about z
+// by a child bone; the bones' attachment fixed or soft (with a stiffness per volume per length).
+std::string twisted_box(const std::string& attachment) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="bone_twist"/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="box"/>
+    <Parameter name="Elements" type="Array(int)" value="{3, 3, 4}"/>
+    <Parameter name="Upper corner" type="Array(double)" value="{1.0, 1.0, 1.5}"/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="1000"/>
+    <Parameter name="Poisson ratio" type="double" value="0.45"/>
+  </ParameterList>
+  <ParameterList name="Skeleton">
+    )x" + attachment + R"x(
+    <ParameterList name="Bones">
+      <ParameterList name="root"><Parameter name="Region" type="string" value="face z-"/></ParameterList>
+      <ParameterList name="top">
+        <Parameter name="Parent" type="string" value="root"/>
+        <Parameter name="Region" type="string" value="face z+"/>
+        <Parameter name="Pivot" type="Array(double)" value="{0.5, 0.5, 1.5}"/>
+        <ParameterList name="Keyframes"><ParameterList name="turned">
+          <Parameter name="Time" type="double" value="1.0"/>
+          <Parameter name="Axis" type="Array(double)" value="{0, 0, 1}"/>
+          <Parameter name="Angle" type="double" value="1.0471975512"/>
+        </ParameterList></ParameterList>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>
+  <ParameterList name="Loading"><Parameter name="Steps" type="int" value="3"/></ParameterList>
+  <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-10"/></ParameterList>
+  )x" + logs_only_output() + R"x(
+</ParameterList>)x";
+}
+
+}  // namespace
+
+// Soft bones: springs to the bones' motion (an energy term, PSD: k_n I per node) instead of prescribed
+// nodes. The twisted box they hold differs from the fixed bones' by an offset that falls as 1/stiffness
+// (ten times stiffer: ten times closer, to 20%); the term's gradient and Hessian match finite differences.
+TEST(Attachments, SoftBonesHoldTheirNodesBySpringsThatTendToFixedBonesAsTheyStiffen) {
+  Simulation fixed(config(twisted_box(""), "test_results/bones_fixed"), RunOptions{true, ""});
+  ASSERT_EQ(fixed.run(), 0);
+  const auto uf = gather(fixed.displacement());
+  std::vector<double> diffs;
+  for (const char* kappa : {"1.0e6", "1.0e7"}) {
+    Simulation soft(config(twisted_box(std::string(R"x(<Parameter name="Bone attachment" type="string" value="soft"/>
+    <Parameter name="Bone stiffness" type="double" value=")x") + kappa + R"x("/>)x"),
+                           std::string("test_results/bones_soft_") + kappa),
+                    RunOptions{true, ""});
+    ASSERT_EQ(soft.run(), 0);
+    const System& sys = soft.scene().system();
+    EXPECT_TRUE(sys.fixed_owned_dofs().empty());  // nothing prescribed: the springs hold the box
+    const auto* term = sys.find_term<BoneSpringTerm>();
+    ASSERT_NE(term, nullptr);
+    const double offset = term->largest_offset(soft.displacement());
+    diffs.push_back(max_diff(uf, gather(soft.displacement())));
+    if (world()->getRank() == 0)
+      std::printf("[ info ] bone stiffness %s: largest offset of a held node %.3e, largest difference from fixed bones %.3e\n", kappa,
+                  offset, diffs.back());
+    EXPECT_GT(offset, 0.0);
+    EXPECT_LT(diffs.back(), 0.05);  // the twist moved the top corners by 0.35
+    if (diffs.size() == 2) {
+      // Gradient and Hessian of the term at a random state, against central differences.
+      auto u = sys.create_vector(), d = sys.create_vector(), f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
+      set_displacement(sys, *u, [](const std::array<double, 3>&, int i, long long gid) { return 0.05 * hash_unit(gid, i); });
+      set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
+      term_energy(sys, *term, *u, f.get());
+      const double h = 1e-6;
+      auto up = sys.create_vector(), um = sys.create_vector();
+      up->update(1.0, *u, h, *d, 0.0);
+      um->update(1.0, *u, -h, *d, 0.0);
+      const double dE = (term_energy(sys, *term, *up, fp.get()) - term_energy(sys, *term, *um, fm.get())) / (2.0 * h);
+      EXPECT_NEAR(f->dot(*d), dE, 1e-7 * std::fabs(dE));
+      const auto H = term_hessian(sys, *term, *u);
+      const auto dg = gather(*d), fpg = gather(*fp), fmg = gather(*fm);
+      double err = 0.0, scale = 0.0;
+      for (std::size_t r = 0; r < H.size(); ++r) {
+        double Hd = 0.0;
+        for (std::size_t c = 0; c < H.size(); ++c) Hd += H[r][c] * dg[c];
+        err = std::max(err, std::fabs(Hd - (fpg[r] - fmg[r]) / (2.0 * h)));
+        scale = std::max(scale, std::fabs((fpg[r] - fmg[r]) / (2.0 * h)));
+      }
+      EXPECT_LT(err, 1e-7 * scale);
+      EXPECT_GE(min_eigenvalue(H), -1e-12 * max_abs(H));
+    }
+  }
+  EXPECT_NEAR(diffs[1] / diffs[0], 0.1, 0.02);
 }

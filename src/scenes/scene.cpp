@@ -1,5 +1,6 @@
 // Scene: the mesh and its material blocks, boundary conditions and bones resolved to nodes (no
 // component prescribed twice), the load path, the skinning predictor and the initial state.
+#include <sinew/algebra/terms/bone_springs.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/core/hash.hpp>
 #include <sinew/core/parameters.hpp>
@@ -98,6 +99,18 @@ void Scene::resolve_conditions(const Teuchos::Comm<int>& comm) {
 
 void Scene::add_bones(const SkeletonParameters& p, const Teuchos::Comm<int>& comm) {
   skeleton_ = std::make_unique<Skeleton>(p, system_->mesh(), comm, "Skeleton");
+  if (p.attachment == SkeletonParameters::Attachment::Soft) {
+    // Springs to the bones' motion instead of prescribed nodes (terms/bone_springs.hpp).
+    std::vector<BoneSpringTerm::Bone> bones;
+    const Skeleton* sk = skeleton_.get();
+    for (std::size_t b = 0; b < skeleton_->size(); ++b)
+      bones.push_back({skeleton_->name(b), skeleton_->nodes(b),
+                       [sk, b](const std::array<double, 3>& X, double t) { return sk->transform(b, t).apply(X); }});
+    const double h = system_->cell_size();
+    const double kappa = p.bone_stiffness > 0.0 ? p.bone_stiffness : 100.0 * system_->stiffness_scale() / (h * h);
+    if (!bones.empty()) system_->add_term(std::make_shared<BoneSpringTerm>(*system_, std::move(bones), kappa));
+    return;
+  }
   for (std::size_t b = 0; b < skeleton_->size(); ++b) {
     BoundaryCondition bc;
     bc.name = "bone " + skeleton_->name(b);

@@ -88,10 +88,21 @@ struct SkeletonParameters {
   double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0, rest_time = -1.0,
          retarget_scale = 0.0;
   bool rig_weights = false;
+  enum class Attachment { Fixed, Soft };
+  Attachment attachment = Attachment::Fixed;
+  double bone_stiffness = 0.0;
 
   template <class V>
   void visit(V& v) {
     v.sections("Bones", bones, "one sublist per bone, named as the bone");
+    v.choice("Bone attachment", attachment, Attachment::Fixed,
+             Choices<Attachment>{{"fixed", Attachment::Fixed}, {"soft", Attachment::Soft}},
+             "how bones hold their nodes: fixed (the nodes move with the bone, prescribed) or soft (each node pulled "
+             "towards where the bone carries it by a stiff spring, an energy term: algebra/terms/bone_springs.hpp)");
+    v.entry("Bone stiffness", bone_stiffness, 0.0,
+            "soft attachment: the springs' stiffness per volume per length (0: 100 (mu_L + lambda_L) / h^2, h the mean "
+            "edge length: a node's spring a hundred times a cell's stiffness)",
+            Range::non_negative());
     v.entry("Rig", rig, std::string(""),
             "bones from a rigged character's joints instead of Bones (see sinew-rig): each joint that moves skin holds "
             "the lattice nodes within 'Bone radius' of the segment to its first child joint (a node near several "
@@ -202,6 +213,7 @@ class Skeleton {
 
 template <class Context>
 void SkeletonParameters::check(const Context& c) const {
+  if (c.given("Bone stiffness") && attachment != Attachment::Soft) c.fail("'Bone stiffness' applies to 'Bone attachment' soft only");
   if (!rig.empty()) {
     if (!bones.empty()) c.fail("give 'Bones' or a 'Rig' (whose joints are the bones), not both");
     if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
