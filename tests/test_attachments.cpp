@@ -9,6 +9,7 @@
 #include <sinew/algebra/terms/attachment.hpp>
 #include <sinew/algebra/terms/bone_springs.hpp>
 #include <sinew/algebra/terms/contact.hpp>
+#include <cmath>
 #include <sinew/driver/run.hpp>
 #include <sinew/scenes/scene.hpp>
 
@@ -443,4 +444,52 @@ TEST(Attachments, SoftBonesHoldTheirNodesBySpringsThatTendToFixedBonesAsTheyStif
     }
   }
   EXPECT_NEAR(diffs[1] / diffs[0], 0.1, 0.02);
+}
+
+namespace {
+
+// The stacked blocks with no attachment, self contact on, the upper block's top moved by `press`.
+std::string touching(const std::string& press) {
+  std::string xml = stacked("fixed", press, R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>)x", 2);
+  const auto a = xml.find("<ParameterList name=\"Attachments\">");
+  const auto b = xml.find("</ParameterList>\n  </ParameterList>", a) + std::string("</ParameterList>\n  </ParameterList>").size();
+  return xml.erase(a, b - a);
+}
+
+}  // namespace
+
+// Two bodies meshed touching (no attachment): self contact finds their interface closer than its
+// thickness at rest and notes it, and does not push the bodies apart there (held in place, nothing
+// moves), yet resists their pressing into each other (the press reaches the lower block; the deepest
+// penetration stays within the rounds' tolerance, a tenth of the thickness, as anywhere else).
+TEST(Attachments, SelfContactDoesNotPushApartBodiesThatTouchAtRestYetResistsPressing) {
+  Simulation held(config(touching("{0, 0, 0}"), "test_results/touching_held"), RunOptions{true, ""});
+  ASSERT_EQ(held.run(), 0);
+  const auto* c = held.scene().system().find_term<ContactTerm>();
+  ASSERT_NE(c, nullptr);
+  const auto notes = c->notes();
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("25 surface points"), std::string::npos) << notes[0];  // 4 x 4 above, 3 x 3 below
+  EXPECT_LT(max_abs(gather(held.displacement())), 1e-12);
+  Simulation pressed(config(touching("{0, 0, -0.1}"), "test_results/touching_pressed"), RunOptions{true, ""});
+  ASSERT_EQ(pressed.run(), 0);
+  // The press reaches the lower block through contact (its top's middle goes down), and the springs'
+  // deepest penetration stays small.
+  const System& sys = pressed.scene().system();
+  const auto u = gather(pressed.displacement());
+  const auto* ct = sys.find_term<ContactTerm>();
+  double sink = 0.0;
+  for (std::size_t v = 0; v < ct->surface().vertices(); ++v) {
+    const auto& P = ct->surface().X[v];
+    if (std::fabs(P[0] - 0.5) + std::fabs(P[1] - 0.5) + std::fabs(P[2] - 0.5) < 1e-12)  // the lower top's middle
+      sink = -u[3 * static_cast<std::size_t>(ct->surface().gid[v]) + 2];
+  }
+  const double penetration = sys.evaluate(pressed.displacement(), nullptr, nullptr).penetration;
+  if (world()->getRank() == 0)
+    std::printf("[ info ] touching at rest: %s; held: nothing moves; pressed by 0.1: the lower top's middle sinks %.4f, "
+                "deepest penetration %.2e\n",
+                notes[0].c_str(), sink, penetration);
+  EXPECT_GT(sink, 0.02);
+  EXPECT_LT(penetration, 0.11 * ct->settings().thickness);  // the rounds' tolerance, a tenth of it, as elsewhere
+  EXPECT_GT(pressed.scene().system().find_term<ContactTerm>()->global_pairs(), 0);
 }

@@ -186,6 +186,32 @@ ContactTerm::ContactTerm(const System& system, const ContactSettings& settings, 
   for (int n : owned_samples_) sample_vertex_.push_back(surface_.vertex_of(system.mesh().node_gid[n]));
   for (auto& c : colliders_) c.prepare();
   collider_lambda_.assign(owned_samples_.size() * colliders_.size(), 0.0);
+  // What touches at rest (every rank finds the same on the replicated surface): a surface point closer
+  // than the thickness to a face outside its ring. Its springs push only from that clearance on.
+  const double delta = settings_.thickness;
+  clearance_.assign(surface_.vertices(), delta);
+  if (settings_.self && delta > 0.0)
+    for (std::size_t v = 0; v < surface_.vertices(); ++v)
+      reference_tree_.near(surface_.X[v], delta, [&](int t) {
+        if (excluded(t, static_cast<int>(v))) return;
+        const auto& T = surface_.triangles[t];
+        double w[3];
+        const double d = std::sqrt(
+            distance2(surface_.X[v], closest_on_triangle(surface_.X[v], surface_.X[T[0]], surface_.X[T[1]], surface_.X[T[2]], w)));
+        clearance_[v] = std::min(clearance_[v], d);
+      });
+}
+
+std::vector<std::string> ContactTerm::notes() const {
+  long long points = 0;
+  for (std::size_t v = 0; v < clearance_.size(); ++v) points += clearance_[v] < settings_.thickness && !system_.tied(surface_.gid[v]);
+  if (points == 0) return {};
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "%lld surface points lie closer than the contact thickness (%.3g) to the surface at rest (pieces meshed "
+                "touching, a fused crease): their springs push only where they come closer than at rest",
+                points, settings_.thickness);
+  return {buf};
 }
 
 void ContactTerm::columns_changed(const Map& columns) {
@@ -240,7 +266,7 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
     for (int j = 0; j < 4; ++j)
       for (int c = 0; c < 3; ++c) g += p.w[j] * p.normal[c] * (p.X[j][c] + u(p.col[j] + c));
     // s: the spring's stretch, its traction k s = max(0, lambda + k (delta - g)).
-    const double s = p.lambda / k + delta - g, kA = k * p.area;
+    const double s = p.lambda / k + p.delta - g, kA = k * p.area;
     if (p.owner == rank_) energy -= 0.5 * p.area * p.lambda * p.lambda / k;
     if (s <= 0.0) continue;
     if (p.owner == rank_) {
@@ -463,10 +489,11 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
     if (g > settings_.margin) continue;
     paired[c.vertex] = g < 0.0 ? 2 : 1;
     double lambda = c.lambda;
-    if (g < -0.1 * delta) {  // Uzawa: the traction that would have held it at the thickness
-      lambda = std::max(0.0, lambda + k * (delta - g));
+    const double clear = clearance_[c.vertex];  // the thickness, or less where it touched at rest
+    if (g < clear - 0.1 * delta) {  // Uzawa: the traction that would have held it at its clearance
+      lambda = std::max(0.0, lambda + k * (clear - g));
       ++stats.raised;
-    } else if (lambda / k + delta - g <= 0.0) {
+    } else if (lambda / k + clear - g <= 0.0) {
       lambda = 0.0;  // not pushing: its traction goes (the state feels no difference)
     }
     kept.push_back({c.vertex, 1, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, 0.0, 0, lambda});
@@ -645,7 +672,7 @@ long long ContactTerm::choose(std::vector<Candidate> all, ContactDetection& stat
       ++stats.kept;
     else
       (c.kind == 0 ? stats.inside : stats.proximity) += 1;
-    if (c.kind == 0 || (c.kind == 2 && c.d2 < delta * delta)) ++pressing_new;
+    if (c.kind == 0 || (c.kind == 2 && c.d2 < clearance_[c.vertex] * clearance_[c.vertex])) ++pressing_new;
     stats.refined += c.refined;
     chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {c.normal[0], c.normal[1], c.normal[2]}, c.lambda});
   }
@@ -671,6 +698,7 @@ void ContactTerm::install() {
     if (!here) continue;
     for (int d = 0; d < 3; ++d) p.normal[d] = c.normal[d];
     p.area = surface_.area[c.vertex];
+    p.delta = clearance_[c.vertex];
     p.lambda = c.lambda;
     p.owner = surface_.owner[c.vertex];
     pairs_.push_back(p);

@@ -163,6 +163,8 @@ void Simulation::print_header() const {
               static_cast<long long>(sys.mesh().global_elements), to_string(sys.mesh().type).c_str(),
               static_cast<long long>(sys.mesh().global_nodes), 3LL * sys.mesh().global_nodes, prescribed);
   for (const auto& note : sys.mesh().notes) std::printf("  mesh note: %s\n", note.c_str());
+  for (const auto& term : sys.terms())
+    for (const auto& note : term->notes()) std::printf("  %s note: %s\n", term->name(), note.c_str());
   std::printf("  material: %s\n", describe(sys.material()).c_str());
   if (!config_.params.skeleton.rig.empty()) {
     const Skeleton& sk = scene_->skeleton();

@@ -168,6 +168,9 @@ class EnergyTerm {
     (void)totals;
     return {};
   }
+  // What the term found when it was set up that a user should know (printed under the run's header as
+  // "<name> note: ..."; the same on every rank).
+  virtual std::vector<std::string> notes() const { return {}; }
   // Names and components of the node fields; the fields themselves, of the last evaluation.
   virtual std::vector<std::pair<std::string, int>> node_field_names() const { return {}; }
   virtual void node_fields(std::vector<TermState::Nodal>& fields) const { (void)fields; }

@@ -125,6 +125,13 @@ class ContactTerm final : public EnergyTerm {
   std::vector<std::string> log_columns() const override;
   std::vector<double> log_values(const EvaluationTotals& totals) const override;
   std::vector<std::string> summary(const EvaluationTotals& totals) const override;
+  // How many surface points touch the surface at rest (see clearance()).
+  std::vector<std::string> notes() const override;
+  // Per surface vertex: the thickness its springs hold it at, the contact thickness, or its distance at
+  // rest to the nearest face outside its ring where that is less (pieces meshed touching, a crease
+  // fused by a lattice): what touches at rest is not pushed apart at the first step, only resisted where
+  // it comes closer.
+  const std::vector<double>& clearance() const { return clearance_; }
   std::vector<std::pair<std::string, int>> node_field_names() const override;
   void node_fields(std::vector<TermState::Nodal>& fields) const override;
   // Where collider k stands at load fraction t.
@@ -163,6 +170,7 @@ class ContactTerm final : public EnergyTerm {
     double X[4][3];    // reference positions of the four nodes
     double normal[3];  // outward normal of the target at detection
     double area;       // the sample's reference area
+    double delta;      // the thickness it is held at: the sample's clearance (clearance())
     double lambda;     // augmented-Lagrangian traction (>= 0)
     int owner;         // the rank that owns the sample and counts the energy
     int col[4];        // column of each node's first DOF on this rank (-1: none)
@@ -211,6 +219,7 @@ class ContactTerm final : public EnergyTerm {
   int rank_ = 0;
   mutable std::vector<double> pressure_;
   std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
+  std::vector<double> clearance_;
 };
 
 }  // namespace sinew
