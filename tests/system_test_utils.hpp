@@ -120,6 +120,37 @@ inline double term_energy(const System& sys, const EnergyTerm& term, const Vecto
   return all;
 }
 
+// A term's derivatives at u along d against central differences of step h (collective): the directional
+// derivative f.d and the energy's difference dE; the largest |H d - (f(u + h d) - f(u - h d)) / 2h| and
+// the largest entry of that difference (scale); H's smallest eigenvalue and largest entry.
+struct TermDerivativeCheck {
+  double dE = 0.0, f_dot_d = 0.0, err = 0.0, scale = 0.0, min_eigenvalue = 0.0, max_entry = 0.0;
+};
+inline double min_eigenvalue(const std::vector<std::vector<double>>& A);
+inline TermDerivativeCheck check_term_derivatives(const System& sys, const EnergyTerm& term, const Vector& u, const Vector& d,
+                                                  double h = 1e-6) {
+  TermDerivativeCheck r;
+  auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
+  auto up = sys.create_vector(), um = sys.create_vector();
+  term_energy(sys, term, u, f.get());
+  up->update(1.0, u, h, d, 0.0);
+  um->update(1.0, u, -h, d, 0.0);
+  r.dE = (term_energy(sys, term, *up, fp.get()) - term_energy(sys, term, *um, fm.get())) / (2.0 * h);
+  r.f_dot_d = f->dot(d);
+  const auto H = term_hessian(sys, term, u);
+  const auto dg = gather(d), fpg = gather(*fp), fmg = gather(*fm);
+  for (std::size_t row = 0; row < H.size(); ++row) {
+    double Hd = 0.0;
+    for (std::size_t c = 0; c < H.size(); ++c) Hd += H[row][c] * dg[c];
+    const double fd = (fpg[row] - fmg[row]) / (2.0 * h);
+    r.err = std::max(r.err, std::fabs(Hd - fd));
+    r.scale = std::max(r.scale, std::fabs(fd));
+  }
+  r.min_eigenvalue = min_eigenvalue(H);
+  r.max_entry = max_abs(H);
+  return r;
+}
+
 // Smallest eigenvalue of a dense symmetric matrix (LAPACK).
 inline double min_eigenvalue(const std::vector<std::vector<double>>& A) {
   const int n = static_cast<int>(A.size());

@@ -116,32 +116,14 @@ TEST(Attachments, TheTermsGradientAndHessianMatchFiniteDifferencesAndArePositive
     EXPECT_GT(lambda, 1.0) << type;
     set_displacement(sys, *u, [](const std::array<double, 3>&, int i, long long gid) { return 0.05 * hash_unit(gid, i); });
     set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
-    auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
-    term_energy(sys, *term, *u, f.get());
-    const double h = 1e-6;
-    auto up = sys.create_vector(), um = sys.create_vector();
-    up->update(1.0, *u, h, *d, 0.0);
-    um->update(1.0, *u, -h, *d, 0.0);
-    const double dE = (term_energy(sys, *term, *up, fp.get()) - term_energy(sys, *term, *um, fm.get())) / (2.0 * h);
-    const double fd_dot = f->dot(*d);
-    EXPECT_NEAR(fd_dot, dE, 1e-7 * std::max(1.0, std::fabs(dE))) << type;
-    const auto H = term_hessian(sys, *term, *u);
-    const auto dg = gather(*d), fpg = gather(*fp), fmg = gather(*fm);
-    double err = 0.0, scale = 0.0;
-    for (std::size_t r = 0; r < H.size(); ++r) {
-      double Hd = 0.0;
-      for (std::size_t c = 0; c < H.size(); ++c) Hd += H[r][c] * dg[c];
-      const double fd = (fpg[r] - fmg[r]) / (2.0 * h);
-      err = std::max(err, std::fabs(Hd - fd));
-      scale = std::max(scale, std::fabs(fd));
-    }
-    EXPECT_GT(scale, 1.0) << type;
-    EXPECT_LT(err, 1e-7 * scale) << type;
-    const double lo = min_eigenvalue(H);
-    EXPECT_GE(lo, -1e-12 * max_abs(H)) << type;
+    const auto c = check_term_derivatives(sys, *term, *u, *d);
+    EXPECT_NEAR(c.f_dot_d, c.dE, 1e-7 * std::max(1.0, std::fabs(c.dE))) << type;
+    EXPECT_GT(c.scale, 1.0) << type;
+    EXPECT_LT(c.err, 1e-7 * c.scale) << type;
+    EXPECT_GE(c.min_eigenvalue, -1e-12 * c.max_entry) << type;
     if (world()->getRank() == 0)
-      std::printf("[ info ] %s: dE/dd %.9e vs f.d %.9e; |H d - FD| %.2e of %.2e; min eigenvalue %.2e of %.2e\n", type, dE, fd_dot,
-                  err, scale, lo, max_abs(H));
+      std::printf("[ info ] %s: dE/dd %.9e vs f.d %.9e; |H d - FD| %.2e of %.2e; min eigenvalue %.2e of %.2e\n", type, c.dE,
+                  c.f_dot_d, c.err, c.scale, c.min_eigenvalue, c.max_entry);
   }
 }
 
@@ -420,27 +402,13 @@ TEST(Attachments, SoftBonesHoldTheirNodesBySpringsThatTendToFixedBonesAsTheyStif
     EXPECT_LT(diffs.back(), 0.05);  // the twist moved the top corners by 0.35
     if (diffs.size() == 2) {
       // Gradient and Hessian of the term at a random state, against central differences.
-      auto u = sys.create_vector(), d = sys.create_vector(), f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
+      auto u = sys.create_vector(), d = sys.create_vector();
       set_displacement(sys, *u, [](const std::array<double, 3>&, int i, long long gid) { return 0.05 * hash_unit(gid, i); });
       set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
-      term_energy(sys, *term, *u, f.get());
-      const double h = 1e-6;
-      auto up = sys.create_vector(), um = sys.create_vector();
-      up->update(1.0, *u, h, *d, 0.0);
-      um->update(1.0, *u, -h, *d, 0.0);
-      const double dE = (term_energy(sys, *term, *up, fp.get()) - term_energy(sys, *term, *um, fm.get())) / (2.0 * h);
-      EXPECT_NEAR(f->dot(*d), dE, 1e-7 * std::fabs(dE));
-      const auto H = term_hessian(sys, *term, *u);
-      const auto dg = gather(*d), fpg = gather(*fp), fmg = gather(*fm);
-      double err = 0.0, scale = 0.0;
-      for (std::size_t r = 0; r < H.size(); ++r) {
-        double Hd = 0.0;
-        for (std::size_t c = 0; c < H.size(); ++c) Hd += H[r][c] * dg[c];
-        err = std::max(err, std::fabs(Hd - (fpg[r] - fmg[r]) / (2.0 * h)));
-        scale = std::max(scale, std::fabs((fpg[r] - fmg[r]) / (2.0 * h)));
-      }
-      EXPECT_LT(err, 1e-7 * scale);
-      EXPECT_GE(min_eigenvalue(H), -1e-12 * max_abs(H));
+      const auto c = check_term_derivatives(sys, *term, *u, *d);
+      EXPECT_NEAR(c.f_dot_d, c.dE, 1e-7 * std::fabs(c.dE));
+      EXPECT_LT(c.err, 1e-7 * c.scale);
+      EXPECT_GE(c.min_eigenvalue, -1e-12 * c.max_entry);
     }
   }
   EXPECT_NEAR(diffs[1] / diffs[0], 0.1, 0.02);

@@ -159,33 +159,14 @@ TEST(Muscles, TheMuscleTermsGradientAndHessianMatchFiniteDifferences) {
       return 0.12 * hash_unit(gid, i) + (i == 0 ? -0.25 * X[0] : 0.1 * X[2]);  // shortened along x: active range
     });
     set_displacement(sys, *d, [](const std::array<double, 3>&, int i, long long gid) { return hash_unit(gid, i, 7); });
-    auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
-    term_energy(sys, term, *u, f.get());
-    const double h = 1e-6;
-    auto up = sys.create_vector(), um = sys.create_vector();
-    up->update(1.0, *u, h, *d, 0.0);
-    um->update(1.0, *u, -h, *d, 0.0);
-    const double dE = (term_energy(sys, term, *up, fp.get()) - term_energy(sys, term, *um, fm.get())) / (2.0 * h);
-    const double fd_dot = f->dot(*d);
-    EXPECT_NEAR(fd_dot, dE, 1e-6 * std::max(1.0, std::fabs(dE))) << to_string(type);
-    // H d against (f(u + h d) - f(u - h d)) / 2h.
-    const auto H = term_hessian(sys, term, *u);
-    const auto dg = gather(*d), fpg = gather(*fp), fmg = gather(*fm);
-    double err = 0.0, scale = 0.0;
-    for (std::size_t r = 0; r < H.size(); ++r) {
-      double Hd = 0.0;
-      for (std::size_t c = 0; c < H.size(); ++c) Hd += H[r][c] * dg[c];
-      const double fd = (fpg[r] - fmg[r]) / (2.0 * h);
-      err = std::max(err, std::fabs(Hd - fd));
-      scale = std::max(scale, std::fabs(fd));
-    }
-    EXPECT_GT(scale, 1e-3) << to_string(type);  // the fibres were loaded
-    EXPECT_LT(err, 1e-6 * scale) << to_string(type);
-    const double lo = min_eigenvalue(H);
-    EXPECT_GE(lo, -1e-12 * max_abs(H)) << to_string(type);
+    const auto c = check_term_derivatives(sys, term, *u, *d);
+    EXPECT_NEAR(c.f_dot_d, c.dE, 1e-6 * std::max(1.0, std::fabs(c.dE))) << to_string(type);
+    EXPECT_GT(c.scale, 1e-3) << to_string(type);  // the fibres were loaded
+    EXPECT_LT(c.err, 1e-6 * c.scale) << to_string(type);
+    EXPECT_GE(c.min_eigenvalue, -1e-12 * c.max_entry) << to_string(type);
     if (world()->getRank() == 0)
-      std::printf("[ info ] %s: dE/dd %.9e vs f.d %.9e; |H d - FD| %.2e of %.2e; min eigenvalue %.2e\n", to_string(type).c_str(), dE,
-                  fd_dot, err, scale, lo);
+      std::printf("[ info ] %s: dE/dd %.9e vs f.d %.9e; |H d - FD| %.2e of %.2e; min eigenvalue %.2e\n", to_string(type).c_str(), c.dE,
+                  c.f_dot_d, c.err, c.scale, c.min_eigenvalue);
   }
 }
 
