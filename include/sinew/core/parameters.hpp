@@ -356,7 +356,10 @@ class Printer {
   }
   template <class S>
   void other_sublists(NamedSections<S>&, const std::string& doc) {
-    open("<name>", doc + "; the same entries as this list");
+    open("<name>", doc);
+    S s = default_section<S>();
+    Printer p(os_, path_ + "/<name>", indent_ + 1);
+    s.visit(p);
   }
   void raw(const char* name, Teuchos::ParameterList&, const std::string& doc) { open(name, doc); }
 
