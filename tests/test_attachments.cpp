@@ -31,6 +31,12 @@ namespace {
 
 auto world() { return Tpetra::getDefaultComm(); }
 
+// A results folder of this run's own: the 1-thread, 2-thread and 2-rank variants run at once.
+std::string results(const std::string& name) {
+  return "test_results/" + name + "_np" + std::to_string(world()->getSize()) + "_t" +
+         std::to_string(Kokkos::DefaultExecutionSpace::concurrency());
+}
+
 const std::string meshes = std::string(SINEW_SOURCE_DIR) + "/tests/meshes/";
 
 // The blocks of meshes/stacked_blocks.geo: the lower one's bottom held, the upper one's top moved by
@@ -98,7 +104,7 @@ std::array<double, 3> pull_reaction(Simulation& sim) {
 // derivative equals the energy's central difference, H d the gradient's, and H is PSD.
 TEST(Attachments, TheTermsGradientAndHessianMatchFiniteDifferencesAndArePositiveSemiDefinite) {
   for (const char* type : {"fixed", "sliding"}) {
-    Simulation sim(config(stacked(type, "{0.1, 0, 0}"), std::string("test_results/attachment_fd_") + type), RunOptions{true, ""});
+    Simulation sim(config(stacked(type, "{0.1, 0, 0}"), results("attachment_fd_") + type), RunOptions{true, ""});
     System& sys = sim.scene().system();
     auto* term = sys.find_term<AttachmentTerm>();
     ASSERT_NE(term, nullptr);
@@ -131,9 +137,9 @@ TEST(Attachments, TheTermsGradientAndHessianMatchFiniteDifferencesAndArePositive
 // tangential force (below 1e-8 of the fixed attachment's, which shears both blocks); the normal gap
 // stays closed; fixed, the upper block's bottom moves with the lower block's top to 1e-10.
 TEST(Attachments, ASlidingBlockCarriesNoTangentialForceAndAFixedOneMovesWithItsBase) {
-  Simulation fixed(config(stacked("fixed", "{0.1, 0.05, 0}"), "test_results/attachment_fixed"), RunOptions{true, ""});
+  Simulation fixed(config(stacked("fixed", "{0.1, 0.05, 0}"), results("attachment_fixed")), RunOptions{true, ""});
   ASSERT_EQ(fixed.run(), 0);
-  Simulation sliding(config(stacked("sliding", "{0.1, 0.05, 0}"), "test_results/attachment_sliding"), RunOptions{true, ""});
+  Simulation sliding(config(stacked("sliding", "{0.1, 0.05, 0}"), results("attachment_sliding")), RunOptions{true, ""});
   ASSERT_EQ(sliding.run(), 0);
   const auto rf = pull_reaction(fixed), rs = pull_reaction(sliding);
   const double pull = std::hypot(rf[0], rf[1]), tangential = std::hypot(rs[0], rs[1]);
@@ -176,9 +182,9 @@ TEST(Attachments, ASlidingBlockCarriesNoTangentialForceAndAFixedOneMovesWithItsB
 // attachment holds them), and the sliding run gives the same state as without contact.
 TEST(Attachments, SelfContactLeavesAnAttachedInterfaceAlone) {
   const std::string contact = R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>)x";
-  Simulation with(config(stacked("sliding", "{0.1, 0.05, 0}", contact, 2), "test_results/attachment_contact"), RunOptions{true, ""});
+  Simulation with(config(stacked("sliding", "{0.1, 0.05, 0}", contact, 2), results("attachment_contact")), RunOptions{true, ""});
   ASSERT_EQ(with.run(), 0);
-  Simulation without(config(stacked("sliding", "{0.1, 0.05, 0}", "", 2), "test_results/attachment_no_contact"), RunOptions{true, ""});
+  Simulation without(config(stacked("sliding", "{0.1, 0.05, 0}", "", 2), results("attachment_no_contact")), RunOptions{true, ""});
   ASSERT_EQ(without.run(), 0);
   const auto* c = with.scene().system().find_term<ContactTerm>();
   ASSERT_NE(c, nullptr);
@@ -228,7 +234,7 @@ TEST(Attachments, AFixedAttachmentAcrossAGapTurnsItsOffsetWithTheTarget) {
   </ParameterList>
   )x" + logs_only_output() + R"x(
 </ParameterList>)x";
-  Simulation sim(config(xml, "test_results/attachment_turned"), RunOptions{true, ""});
+  Simulation sim(config(xml, results("attachment_turned")), RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
   const System& sys = sim.scene().system();
   const auto* term = sys.find_term<AttachmentTerm>();
@@ -281,7 +287,7 @@ TEST(Attachments, ARestartContinuesWithTheTractions) {
     c.params.output.checkpoint_every = 1;
     return c;
   };
-  const std::string whole_dir = "test_results/attachment_whole", dir = "test_results/attachment_stopped";
+  const std::string whole_dir = results("attachment_whole"), dir = results("attachment_stopped");
   Simulation whole(make(whole_dir), RunOptions{true, ""});
   ASSERT_EQ(whole.run(), 0);
   std::vector<AttachmentTerm::Pair> stopped;
@@ -379,14 +385,14 @@ std::string twisted_box(const std::string& attachment) {
 // nodes. The twisted box they hold differs from the fixed bones' by an offset that falls as 1/stiffness
 // (ten times stiffer: ten times closer, to 20%); the term's gradient and Hessian match finite differences.
 TEST(Attachments, SoftBonesHoldTheirNodesBySpringsThatTendToFixedBonesAsTheyStiffen) {
-  Simulation fixed(config(twisted_box(""), "test_results/bones_fixed"), RunOptions{true, ""});
+  Simulation fixed(config(twisted_box(""), results("bones_fixed")), RunOptions{true, ""});
   ASSERT_EQ(fixed.run(), 0);
   const auto uf = gather(fixed.displacement());
   std::vector<double> diffs;
   for (const char* kappa : {"1.0e6", "1.0e7"}) {
     Simulation soft(config(twisted_box(std::string(R"x(<Parameter name="Bone attachment" type="string" value="soft"/>
     <Parameter name="Bone stiffness" type="double" value=")x") + kappa + R"x("/>)x"),
-                           std::string("test_results/bones_soft_") + kappa),
+                           results("bones_soft_") + kappa),
                     RunOptions{true, ""});
     ASSERT_EQ(soft.run(), 0);
     const System& sys = soft.scene().system();
@@ -431,7 +437,7 @@ std::string touching(const std::string& press) {
 // moves), yet resists their pressing into each other (the press reaches the lower block; the deepest
 // penetration stays within the rounds' tolerance, a tenth of the thickness, as anywhere else).
 TEST(Attachments, SelfContactDoesNotPushApartBodiesThatTouchAtRestYetResistsPressing) {
-  Simulation held(config(touching("{0, 0, 0}"), "test_results/touching_held"), RunOptions{true, ""});
+  Simulation held(config(touching("{0, 0, 0}"), results("touching_held")), RunOptions{true, ""});
   ASSERT_EQ(held.run(), 0);
   const auto* c = held.scene().system().find_term<ContactTerm>();
   ASSERT_NE(c, nullptr);
@@ -439,7 +445,7 @@ TEST(Attachments, SelfContactDoesNotPushApartBodiesThatTouchAtRestYetResistsPres
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("25 surface points"), std::string::npos) << notes[0];  // 4 x 4 above, 3 x 3 below
   EXPECT_LT(max_abs(gather(held.displacement())), 1e-12);
-  Simulation pressed(config(touching("{0, 0, -0.1}"), "test_results/touching_pressed"), RunOptions{true, ""});
+  Simulation pressed(config(touching("{0, 0, -0.1}"), results("touching_pressed")), RunOptions{true, ""});
   ASSERT_EQ(pressed.run(), 0);
   // The press reaches the lower block through contact (its top's middle goes down), and the springs'
   // deepest penetration stays small.
