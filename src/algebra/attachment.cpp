@@ -1,11 +1,9 @@
 // AttachmentTerm (terms/attachment.hpp): pairs found at rest, the energy's host loop, the rounds.
 #include <sinew/algebra/system.hpp>
 #include <sinew/algebra/terms/attachment.hpp>
-#include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 #include <sinew/discretization/aabb_tree.hpp>
 
-#include <Tpetra_Import.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -33,6 +31,11 @@ Frame frame_of(const Vec& a, const Vec& b, const Vec& c) {
   return f;
 }
 
+// The point beta_a x_a + beta_b x_b + beta_c x_c of triangle t.
+Vec point_on(const std::vector<std::array<int, 3>>& T, const std::vector<Vec>& x, int t, const double beta[3]) {
+  return beta[0] * x[T[t][0]] + beta[1] * x[T[t][1]] + beta[2] * x[T[t][2]];
+}
+
 std::string format_gap(double g) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", g);
@@ -45,6 +48,8 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
     : system_(system), specs_(std::move(specs)), rounds_(rounds) {
   rank_ = system.comm()->getRank();
   surface_ = replicate_boundary(system.mesh(), *system.comm());
+  owned_surface_ = local_boundary(system.mesh()).owned_vertices;
+  for (int n : owned_surface_) owned_vertex_.push_back(surface_.vertex_of(system.mesh().node_gid[n]));
   const auto& T = surface_.triangles;
   const std::size_t V = surface_.vertices();
   auto member = [&](const std::vector<GlobalId>& nodes) {
@@ -83,7 +88,7 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
       if (!source[v] || taken[v]) continue;
       const Vec& x = surface_.X[v];
       auto d2 = [&](int i) {
-        if (excluded(tris[i], static_cast<int>(v))) return HUGE_VAL;
+        if (surface_.touches_ring(tris[i], static_cast<int>(v))) return HUGE_VAL;
         double w[3];
         const auto& t = T[tris[i]];
         return distance2(x, closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], w));
@@ -102,16 +107,9 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
       p.area = surface_.area[v];
       const auto& t = T[p.triangle];
       const Vec q = closest_on_triangle(x, surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]], p.beta);
-      const Frame f = frame_of(surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]]);
-      const Vec r = x - q;
-      if (spec.kind == AttachmentKind::Fixed) {
-        for (int d = 0; d < 3; ++d) {
-          p.rest[d] = dot(r, f.e[d]);
-          p.frozen[d] = r[d];
-        }
-      } else {
-        p.rest[0] = dot(r, f.e[2]);
-        for (int d = 0; d < 3; ++d) p.frozen[d] = f.e[2][d];
+      if (spec.kind == AttachmentKind::Fixed) {  // r0 in the target's frame (a sliding pair's g0 follows the freeze below)
+        const Frame f = frame_of(surface_.X[t[0]], surface_.X[t[1]], surface_.X[t[2]]);
+        for (int d = 0; d < 3; ++d) p.rest[d] = dot(x - q, f.e[d]);
       }
       p.rest_triangle = p.triangle;
       std::copy(p.beta, p.beta + 3, p.rest_beta);
@@ -133,22 +131,14 @@ AttachmentTerm::AttachmentTerm(System& system, std::vector<AttachmentSpec> specs
   last_gap_.assign(specs_.size(), 0.0);
   last_slide_.assign(specs_.size(), 0.0);
   moved_.assign(specs_.size(), 0);
-  // The rest normal gap along the normal a round freezes (interpolated), so that rest is g = 0.
-  int moved = 0;
-  freeze(surface_.X, moved);
+  // Frames and normals at rest; a sliding pair's g0 along the normal a round freezes (interpolated),
+  // so that rest is g = 0.
+  freeze(surface_.X);
   std::fill(moved_.begin(), moved_.end(), 0);
   for (Pair& p : pairs_)
-    if (specs_[p.spec].kind == AttachmentKind::Sliding) {
-      p.rest[0] = 0.0;
-      p.rest[0] = gap(p, surface_.X)[0];
-    }
+    if (specs_[p.spec].kind == AttachmentKind::Sliding)
+      p.rest[0] = dot(surface_.X[p.vertex] - point_on(T, surface_.X, p.triangle, p.beta), Vec{p.frozen[0], p.frozen[1], p.frozen[2]});
   committed_ = pairs_;
-}
-
-bool AttachmentTerm::excluded(int t, int v) const {
-  for (int m : surface_.triangles[t])
-    if (surface_.in_ring(v, surface_.gid[m])) return true;
-  return false;
 }
 
 void AttachmentTerm::columns_changed(const Map&) { columns_ = system_.column_dofs(); }
@@ -201,28 +191,18 @@ void AttachmentTerm::add(const TermInput& in, TermOutput& out) const {
       if (col[j] < 0) throw std::logic_error("AttachmentTerm: a pair's node is not a column here (System::update_pattern not called)");
     }
     const double w[4] = {1.0, -p.beta[0], -p.beta[1], -p.beta[2]};
-    double d[3] = {0.0, 0.0, 0.0};  // x_s - p
+    Vec d{0.0, 0.0, 0.0};  // x_s - p
     for (int j = 0; j < 4; ++j)
       for (int c = 0; c < 3; ++c) d[c] += w[j] * (surface_.X[v[j]][c] + u(col[j] + c));
     const double k = specs_[p.spec].stiffness, kA = k * p.area;
     const bool fixed = specs_[p.spec].kind == AttachmentKind::Fixed;
-    // t: the traction (lambda + k g), a vector (fixed) or along n (sliding); its direction's components.
-    double t[3], dir[3] = {p.frozen[0], p.frozen[1], p.frozen[2]};
-    const bool counts = surface_.owner[p.vertex] == rank_;  // the sample's owner counts the energy
-    if (fixed) {
-      double gg = 0.0;
-      for (int c = 0; c < 3; ++c) {
-        const double g = d[c] - p.frozen[c];
-        gg += g * g;
-        t[c] = p.lambda[c] + k * g;
-        if (counts) energy += p.area * p.lambda[c] * g;
-      }
-      if (counts) energy += 0.5 * kA * gg;
-    } else {
-      const double g = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2] - p.rest[0];
-      for (int c = 0; c < 3; ++c) t[c] = (p.lambda[0] + k * g) * dir[c];
-      if (counts) energy += p.area * (p.lambda[0] * g + 0.5 * k * g * g);
-    }
+    const Vec g = gap(p, d);  // sliding: g[0] along the normal, the rest zero
+    // t: the traction (lambda + k g), a vector (fixed) or along n (sliding).
+    const double dir[3] = {p.frozen[0], p.frozen[1], p.frozen[2]};
+    double t[3];
+    for (int c = 0; c < 3; ++c) t[c] = fixed ? p.lambda[c] + k * g[c] : (p.lambda[0] + k * g[0]) * dir[c];
+    if (surface_.owner[p.vertex] == rank_)  // the sample's owner counts the energy
+      energy += p.area * (dot(Vec{p.lambda[0], p.lambda[1], p.lambda[2]}, g) + 0.5 * k * dot(g, g));
     for (int j = 0; j < 4; ++j) {
       if (col[j] >= owned_dofs) continue;  // not a row of this rank
       for (int c = 0; c < 3; ++c) {
@@ -244,33 +224,24 @@ void AttachmentTerm::add(const TermInput& in, TermOutput& out) const {
 }
 
 std::vector<Vec> AttachmentTerm::positions(const Vector& u) const {
-  struct Position {
-    int vertex;
-    double x[3];
-  };
-  const Mesh& mesh = system_.mesh();
-  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), system_.mesh().X);
   auto uh = u.getLocalViewHost(Tpetra::Access::ReadOnly);
-  std::vector<Position> mine;
-  for (std::size_t n = 0; n < mesh.n_owned_nodes; ++n) {
-    const int v = surface_.vertex_of(mesh.node_gid[n]);
-    if (v < 0) continue;
-    mine.push_back({v, {X(n, 0) + uh(3 * n, 0), X(n, 1) + uh(3 * n + 1, 0), X(n, 2) + uh(3 * n + 2, 0)}});
-  }
-  std::vector<Vec> x(surface_.vertices(), Vec{});
-  for (const Position& p : allgatherv(raw_comm(*system_.comm()), mine)) x[p.vertex] = {p.x[0], p.x[1], p.x[2]};
-  return x;
+  return gather_surface_positions(surface_, *system_.comm(), owned_surface_, owned_vertex_, [&](int n) {
+    return Vec{X(n, 0) + uh(3 * n, 0), X(n, 1) + uh(3 * n + 1, 0), X(n, 2) + uh(3 * n + 2, 0)};
+  });
 }
 
-Vec AttachmentTerm::gap(const Pair& p, const std::vector<Vec>& x) const {
-  const auto& t = surface_.triangles[p.triangle];
-  const Vec d = x[p.vertex] - (p.beta[0] * x[t[0]] + p.beta[1] * x[t[1]] + p.beta[2] * x[t[2]]);
+Vec AttachmentTerm::gap(const Pair& p, const Vec& d) const {
   const Vec frozen{p.frozen[0], p.frozen[1], p.frozen[2]};
   if (specs_[p.spec].kind == AttachmentKind::Fixed) return d - frozen;
   return {dot(d, frozen) - p.rest[0], 0.0, 0.0};
 }
 
-void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
+Vec AttachmentTerm::gap(const Pair& p, const std::vector<Vec>& x) const {
+  return gap(p, x[p.vertex] - point_on(surface_.triangles, x, p.triangle, p.beta));
+}
+
+void AttachmentTerm::freeze(const std::vector<Vec>& x) {
   const auto& T = surface_.triangles;
   // Sliding samples move to the closest point of their deformed target surface, searched near the
   // current target (within twice the farther of the attachment distance and the sample's distance).
@@ -299,11 +270,11 @@ void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
       const auto& tris = target_triangles_[p.spec];
       const Vec& xs = x[p.vertex];
       const auto& t0 = T[p.triangle];
-      const double now = norm(xs - (p.beta[0] * x[t0[0]] + p.beta[1] * x[t0[1]] + p.beta[2] * x[t0[2]]));
+      const double now = norm(xs - point_on(T, x, p.triangle, p.beta));
       const double limit = 2.0 * std::max(spec.distance, now) + 1e-12;
       double best2 = 0.0;
       const int i = trees[p.spec].closest(xs, limit * limit, [&](int k) {
-        if (excluded(tris[k], p.vertex)) return HUGE_VAL;
+        if (surface_.touches_ring(tris[k], p.vertex)) return HUGE_VAL;
         double w[3];
         const auto& t = T[tris[k]];
         return distance2(xs, closest_on_triangle(xs, x[t[0]], x[t[1]], x[t[2]], w));
@@ -314,7 +285,6 @@ void AttachmentTerm::freeze(const std::vector<Vec>& x, int& moved) {
         const double here = distance2(xs, closest_on_triangle(xs, x[t0[0]], x[t0[1]], x[t0[2]], w));
         if (tris[i] != p.triangle && best2 < here * (1.0 - 1e-12)) {
           p.triangle = tris[i];
-          ++moved;
           ++moved_[p.spec];
         }
         const auto& t = T[p.triangle];
@@ -353,8 +323,7 @@ RoundResult AttachmentTerm::round(const Vector& u, int round) {
       const double k = specs_[p.spec].stiffness;
       for (int d = 0; d < 3; ++d) p.lambda[d] += k * g[d];
     }
-  int moved = 0;
-  freeze(x, moved);
+  freeze(x);
   std::fill(last_gap_.begin(), last_gap_.end(), 0.0);
   for (const Pair& p : pairs_) last_gap_[p.spec] = std::max(last_gap_[p.spec], norm(gap(p, x)));
   last_slide_ = slides(x);
@@ -387,19 +356,15 @@ std::vector<double> AttachmentTerm::slides(const std::vector<Vec>& x) const {
   const auto& T = surface_.triangles;
   std::vector<double> out(specs_.size(), 0.0);
   for (const Pair& p : pairs_) {
-    const auto& t = T[p.rest_triangle];
-    const Vec now = x[p.vertex] - (p.rest_beta[0] * x[t[0]] + p.rest_beta[1] * x[t[1]] + p.rest_beta[2] * x[t[2]]);
+    const Vec now = x[p.vertex] - point_on(T, x, p.rest_triangle, p.rest_beta);
     // A fixed pair's offset turns with its target (R r0): its slide is its gap.
     const Vec rest = specs_[p.spec].kind == AttachmentKind::Fixed
                          ? Vec{p.frozen[0], p.frozen[1], p.frozen[2]}
-                         : surface_.X[p.vertex] - (p.rest_beta[0] * surface_.X[t[0]] + p.rest_beta[1] * surface_.X[t[1]] +
-                                                   p.rest_beta[2] * surface_.X[t[2]]);
+                         : surface_.X[p.vertex] - point_on(T, surface_.X, p.rest_triangle, p.rest_beta);
     out[p.spec] = std::max(out[p.spec], norm(now - rest));
   }
   return out;
 }
-
-std::vector<double> AttachmentTerm::largest_slides(const Vector& u) const { return slides(positions(u)); }
 
 void AttachmentTerm::end_step(const Vector&) { committed_ = pairs_; }
 void AttachmentTerm::abandon_step() { pairs_ = committed_; }

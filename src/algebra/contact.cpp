@@ -393,11 +393,12 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
     return stats;
   }
   gather_surface(at);
-  if (tied_.empty()) {  // the attachments' nodes (they are set up after this term)
+  if (!tied_known_) {  // the attachments' nodes: they are set up after this term, before any detection
     std::vector<char> tied(surface_.vertices(), 0);
     bool any = false;
     for (std::size_t v = 0; v < surface_.vertices(); ++v) any = (tied[v] = system_.tied(surface_.gid[v])) || any;
     if (any) tied_ = std::move(tied);
+    tied_known_ = true;
   }
   // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
   // inside test cannot tell it more).
@@ -453,26 +454,14 @@ long long ContactTerm::update_collider_tractions(const Positions& at, bool keep)
 }
 
 void ContactTerm::gather_surface(Positions& at) const {
-  struct Position {
-    int vertex;
-    double x[3];
-  };
-  std::vector<Position> mine;
-  for (std::size_t i = 0; i < owned_samples_.size(); ++i) {
-    const Vec p = at.node(owned_samples_[i]);
-    mine.push_back({sample_vertex_[i], {p[0], p[1], p[2]}});
-  }
-  at.surface.assign(surface_.vertices(), Vec{});
-  for (const Position& p : allgatherv(raw_comm(*system_.comm()), mine)) at.surface[p.vertex] = {p.x[0], p.x[1], p.x[2]};
+  at.surface = gather_surface_positions(surface_, *system_.comm(), owned_samples_, sample_vertex_, [&](int n) { return at.node(n); });
 }
 
 bool ContactTerm::excluded(int t, int v) const {
   // Attached surfaces (System::tie_nodes) are the attachment's: a tied sample, or a face of tied nodes.
   if (!tied_.empty() && (tied_[v] || (tied_[surface_.triangles[t][0]] && tied_[surface_.triangles[t][1]] && tied_[surface_.triangles[t][2]])))
     return true;
-  for (int m : surface_.triangles[t])
-    if (surface_.in_ring(v, surface_.gid[m])) return true;
-  return false;
+  return surface_.touches_ring(t, v);
 }
 
 std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions& at, const std::vector<Chosen>& previous,

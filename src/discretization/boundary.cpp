@@ -79,6 +79,29 @@ bool SurfaceMesh::in_ring(int v, GlobalId g) const {
   return std::binary_search(ring.begin() + ring_offsets[v], ring.begin() + ring_offsets[v + 1], g);
 }
 
+bool SurfaceMesh::touches_ring(int t, int v) const {
+  for (int m : triangles[t])
+    if (in_ring(v, gid[m])) return true;
+  return false;
+}
+
+std::vector<geom::Vec> gather_surface_positions(const SurfaceMesh& s, const Teuchos::Comm<int>& comm, const std::vector<int>& owned,
+                                                const std::vector<int>& vertex, const std::function<geom::Vec(int)>& position) {
+  struct Position {
+    int vertex;
+    double x[3];
+  };
+  std::vector<Position> mine;
+  mine.reserve(owned.size());
+  for (std::size_t i = 0; i < owned.size(); ++i) {
+    const geom::Vec p = position(owned[i]);
+    mine.push_back({vertex[i], {p[0], p[1], p[2]}});
+  }
+  std::vector<geom::Vec> x(s.vertices(), geom::Vec{});
+  for (const Position& p : allgatherv(raw_comm(comm), mine)) x[p.vertex] = {p.x[0], p.x[1], p.x[2]};
+  return x;
+}
+
 SurfaceMesh replicate_boundary(const Mesh& mesh, const Teuchos::Comm<int>& comm) {
   using namespace geom;
   const MPI_Comm c = raw_comm(comm);

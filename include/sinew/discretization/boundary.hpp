@@ -11,6 +11,7 @@
 #include <sinew/discretization/mesh.hpp>
 
 #include <array>
+#include <functional>
 #include <vector>
 
 namespace sinew {
@@ -40,7 +41,16 @@ struct SurfaceMesh {
   int vertex_of(GlobalId g) const;
   // Whether global node g shares an element with vertex v (or is v).
   bool in_ring(int v, GlobalId g) const;
+  // Whether triangle t has a vertex in v's ring: a face next to v at rest, which contact and
+  // attachments never pair v with.
+  bool touches_ring(int t, int v) const;
 };
+
+// Every surface vertex's current position, on every rank (collective): each rank sends those of its
+// owned surface nodes (`owned`: local nodes, `vertex`: their surface vertices, `position`: a local
+// node's current position). Surface-sized.
+std::vector<geom::Vec> gather_surface_positions(const SurfaceMesh& s, const Teuchos::Comm<int>& comm, const std::vector<int>& owned,
+                                                const std::vector<int>& vertex, const std::function<geom::Vec(int)>& position);
 
 // Collective.
 SurfaceMesh replicate_boundary(const Mesh& mesh, const Teuchos::Comm<int>& comm);

@@ -89,15 +89,15 @@ class AttachmentTerm final : public EnergyTerm {
   const SurfaceMesh& surface() const { return surface_; }
   // Collective: per attachment, the largest |gap| at u (owned DOFs) with the frozen frames and targets.
   std::vector<double> largest_gaps(const Vector& u) const;
-  // Collective: per attachment, the largest slide at u: how far a sample moved relative to the target
-  // point it touched at rest (a fixed attachment's is its gap; a sliding one's, the tangential travel).
-  std::vector<double> largest_slides(const Vector& u) const;
+
 
  private:
   std::vector<geom::Vec> positions(const Vector& u) const;  // every surface vertex at u (collective)
-  geom::Vec gap(const Pair& p, const std::vector<geom::Vec>& x) const;  // sliding: component 0
-  void freeze(const std::vector<geom::Vec>& x, int& moved);  // frames, normals, sliding targets at x
-  bool excluded(int triangle, int vertex) const;
+  // The gap of a pair whose sample lies at d = x_s - p from its target point (sliding: component 0), and
+  // at surface positions x.
+  geom::Vec gap(const Pair& p, const geom::Vec& d) const;
+  geom::Vec gap(const Pair& p, const std::vector<geom::Vec>& x) const;
+  void freeze(const std::vector<geom::Vec>& x);  // frames, normals, sliding targets at x
   int column(GlobalId g) const;
 
   System& system_;
@@ -105,9 +105,12 @@ class AttachmentTerm final : public EnergyTerm {
   int rounds_ = 10;
   int rank_ = 0;
   SurfaceMesh surface_;
+  std::vector<int> owned_surface_, owned_vertex_;  // local owned nodes on the surface, their surface vertices
   std::vector<std::vector<int>> target_triangles_;  // per spec: surface triangles of its target
   std::vector<Pair> pairs_, committed_;
   std::vector<double> last_gap_, last_slide_;  // per spec, at the last round
+  // Per attachment, the largest slide at x: how far a sample moved from the target point it touched at
+  // rest (a fixed pair's slide is its gap; a sliding one's, its tangential travel).
   std::vector<double> slides(const std::vector<geom::Vec>& x) const;
   std::vector<long long> moved_;  // per spec: sliding targets moved to another triangle in this step
   Teuchos::RCP<const Map> columns_;

@@ -219,6 +219,7 @@ class ContactTerm final : public EnergyTerm {
   int rank_ = 0;
   mutable std::vector<double> pressure_;
   std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
+  bool tied_known_ = false;  // tied_ read from the system (at the first detection)
   std::vector<double> clearance_;
 };
 
