@@ -69,6 +69,22 @@ inline Obj read_obj(const std::string& path) {
   return o;
 }
 
+// The opening of a scene on a mesh file with one stable Neo-Hookean law: the Sinew list with its Scene
+// name, the Mesh and Material sections; the caller adds the other sections and the closing tag.
+inline std::string file_scene_head(const std::string& scene, const std::string& mesh_file, double E = 1000.0, double nu = 0.45) {
+  return R"x(<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value=")x" + scene + R"x("/>
+  <ParameterList name="Mesh">
+    <Parameter name="Type" type="string" value="file"/>
+    <Parameter name="File" type="string" value=")x" + mesh_file + R"x("/>
+  </ParameterList>
+  <ParameterList name="Material">
+    <Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value=")x" + std::to_string(E) + R"x("/>
+    <Parameter name="Poisson ratio" type="double" value=")x" + std::to_string(nu) + R"x("/>
+  </ParameterList>)x";
+}
+
 // A scene's Output section that writes no files but the logs (tests compare states in memory);
 // `extra` adds entries (a checkpoint).
 inline std::string logs_only_output(const std::string& extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x") {

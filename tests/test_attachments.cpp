@@ -42,17 +42,7 @@ const std::string meshes = std::string(SINEW_SOURCE_DIR) + "/tests/meshes/";
 // The blocks of meshes/stacked_blocks.geo: the lower one's bottom held, the upper one's top moved by
 // `pull` (all three components prescribed); the upper block's bottom attached to the lower's top.
 std::string stacked(const std::string& type, const std::string& pull, const std::string& extra = "", int steps = 4) {
-  return R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="stacked_blocks"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="file"/>
-    <Parameter name="File" type="string" value=")x" + meshes + R"x(stacked_blocks.msh"/>
-  </ParameterList>
-  <ParameterList name="Material">
-    <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="1000"/>
-    <Parameter name="Poisson ratio" type="double" value="0.45"/>
-  </ParameterList>
+  return file_scene_head("stacked_blocks", meshes + "stacked_blocks.msh") + R"x(
   <ParameterList name="Attachments">
     <ParameterList name="interface">
       <Parameter name="Type" type="string" value=")x" + type + R"x("/>
@@ -197,17 +187,7 @@ TEST(Attachments, SelfContactLeavesAnAttachedInterfaceAlone) {
 // rigidly (its offset across the gap turns with the target's frame), to 1e-8 of the motion.
 TEST(Attachments, AFixedAttachmentAcrossAGapTurnsItsOffsetWithTheTarget) {
   const double angle = 0.698132;  // 40 degrees, as the XML spells it
-  const std::string xml = R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="turned_blocks"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="file"/>
-    <Parameter name="File" type="string" value=")x" + meshes + R"x(two_blocks.msh"/>
-  </ParameterList>
-  <ParameterList name="Material">
-    <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="1000"/>
-    <Parameter name="Poisson ratio" type="double" value="0.45"/>
-  </ParameterList>
+  const std::string xml = file_scene_head("turned_blocks", meshes + "two_blocks.msh") + R"x(
   <ParameterList name="Attachments">
     <ParameterList name="across">
       <Parameter name="Region" type="string" value="group upper"/>

@@ -274,17 +274,7 @@ namespace {
 
 std::string blocks_xml(double push, bool self, int steps = 4, const std::string& contact_extra = "",
                        const std::string& output_extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x") {
-  return R"x(<ParameterList name="Sinew">
-  <Parameter name="Scene" type="string" value="blocks"/>
-  <ParameterList name="Mesh">
-    <Parameter name="Type" type="string" value="file"/>
-    <Parameter name="File" type="string" value=")x" + meshes + R"x(two_blocks.msh"/>
-  </ParameterList>
-  <ParameterList name="Material">
-    <Parameter name="Model" type="string" value="stable-neohookean"/>
-    <Parameter name="Young modulus" type="double" value="1000.0"/>
-    <Parameter name="Poisson ratio" type="double" value="0.45"/>
-  </ParameterList>
+  return file_scene_head("blocks", meshes + "two_blocks.msh") + R"x(
   <ParameterList name="Loading">
     <Parameter name="Steps" type="int" value=")x" + std::to_string(steps) + R"x("/>
     <ParameterList name="Boundary conditions">
