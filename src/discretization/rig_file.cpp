@@ -170,7 +170,27 @@ RigFile read_rig_file(const std::string& path) {
     rig.nodes.push_back(node);
     for (unsigned c = 0; c < n->mNumChildren; ++c) walk(n->mChildren[c], me);
   };
-  walk(scene->mRootNode, -1);
+  // Units: FBX files say how many centimetres a unit is (Blender's and Maya's exports: 1 or 100, so a
+  // character may come in centimetres); Sinew's lengths, cell sizes and densities are in metres.
+  double unit_cm = 0.0;
+  if (scene->mMetaData) {
+    float f = 0.0f;
+    double d = 0.0;
+    if (scene->mMetaData->Get("UnitScaleFactor", d))
+      unit_cm = d;
+    else if (scene->mMetaData->Get("UnitScaleFactor", f))
+      unit_cm = f;
+  }
+  int root_parent = -1;
+  if (std::isfinite(unit_cm) && unit_cm > 0.0 && std::fabs(unit_cm - 100.0) > 1e-9) {
+    rig.metres_per_unit = unit_cm / 100.0;
+    RigNode units;
+    units.name = "$units";
+    for (int i = 0; i < 3; ++i) units.rest.A(i, i) = rig.metres_per_unit;
+    rig.nodes.push_back(units);
+    root_parent = 0;
+  }
+  walk(scene->mRootNode, root_parent);
   std::map<unsigned, int> mesh_node;  // the node that places each mesh
   for (const auto& [n, i] : index)
     for (unsigned k = 0; k < n->mNumMeshes; ++k) mesh_node.emplace(n->mMeshes[k], i);
@@ -454,6 +474,13 @@ std::string describe(const RigFile& rig) {
       os << "open (" << m.open_edges << " open edges)";
     os << ", " << m.bones.size() << " bones, placed by node '" << rig.nodes[m.node].name << "'\n";
   }
+  // The skin's box in the bind pose: what a 'Cell size' is chosen against.
+  if (!rig.meshes.empty()) {
+    const TriangleSurface skin = rig_surface(rig, "");
+    os << "  skin in the bind pose: a box of " << skin.upper[0] - skin.lower[0] << " x " << skin.upper[1] - skin.lower[1] << " x "
+       << skin.upper[2] - skin.lower[2] << " (from " << skin.lower[0] << ", " << skin.lower[1] << ", " << skin.lower[2] << ")\n";
+  }
+  if (rig.metres_per_unit != 1.0) os << "  units: " << rig.metres_per_unit << " m each (the file's UnitScaleFactor), scaled to metres\n";
   os << "nodes (* joint):\n";
   std::vector<int> depth(rig.nodes.size(), 0);
   for (std::size_t n = 0; n < rig.nodes.size(); ++n) {

@@ -90,6 +90,9 @@ struct RigClip {
 
 struct RigFile {
   std::string path, format;
+  // Metres per unit of the file (an FBX file's UnitScaleFactor / 100; 1 for formats that say none).
+  // When not 1, a node '$units' above the file's root scales everything the file holds to metres.
+  double metres_per_unit = 1.0;
   std::vector<RigNode> nodes;  // parents before their children
   std::vector<RigMesh> meshes;
   std::vector<RigClip> clips;
