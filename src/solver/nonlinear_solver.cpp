@@ -644,6 +644,11 @@ struct NonlinearSolver::Impl {
 
   Impl(System& s, const SolverParameters& p)
       : sys(s), params(p), lag(false, p.update_factor) {
+    // The default tolerance in force units, raised for a body whose cells carry much larger forces
+    // (a character modelled in centimetres: 1e-2 was a billionth of its force scale, which Newton
+    // crawled towards for a hundred iterations a step).
+    if (params.absolute_tolerance == 0.0)
+      params.absolute_tolerance = std::max(1e-2, 1e-6 * s.stiffness_scale() * s.cell_size() * s.cell_size());
     MPI_Comm_dup(raw_comm(*s.comm()), &error_comm);
     nox = default_nox(s.comm()->getRank());
     nox.sublist("Line Search").set("Method", std::string(nox_name(p.line_search)));

@@ -45,8 +45,10 @@ struct SolverParameters {
 
   template <class V>
   void visit(V& v) {
-    v.entry("Absolute tolerance", absolute_tolerance, 1e-2,
-            "converged when the L2 norm of the force residual is below this (the paper's test)", Range::positive());
+    v.entry("Absolute tolerance", absolute_tolerance, 0.0,
+            "converged when the L2 norm of the force residual is below this (the paper's test; 0: 1e-2, or a millionth "
+            "of a cell's force scale (mu_L + lambda_L) h^2 where that is larger: a body modelled in centimetres)",
+            Range::non_negative());
     v.entry("Relative tolerance", relative_tolerance, 0.0,
             "also converged when the residual norm falls below this times the step's first (0: off)",
             Range::closed_open(0.0, 1.0));
