@@ -715,8 +715,24 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   step_.seconds += d.seconds;
   step_.pairs = global_pairs_;
   step_.inside_depth = d.deepest;
+  // The same pairs (sample, target triangle) as an earlier round of this step and no traction raised:
+  // a solve already had these springs, so another would only go round the same cycle. (A sample stuck
+  // in a crease re-entered as "inside" round after round, and two proximity pairs came and went in
+  // turn: huesitos' steps ran all 10 rounds, 84 Newton iterations where 4 rounds had settled it.)
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(chosen_.size());
+  for (const Chosen& c : chosen_) pairs.emplace_back(c.vertex, c.triangle);
+  std::sort(pairs.begin(), pairs.end());
+  // Only while the samples inside get no shallower (or none is inside then and now): refreezing a
+  // stuck sample's springs is what pushes it out of a fold (tests/fold_test.sh).
+  if (round == 0) round_pairs_.clear();
+  bool unchanged = false;
+  if (round > 0 && d.raised == 0)
+    for (const auto& [seen, deepest] : round_pairs_)
+      if (seen == pairs && (d.deepest == 0.0 ? deepest == 0.0 : deepest > 0.0 && d.deepest >= 0.99 * deepest)) unchanged = true;
+  round_pairs_.emplace_back(std::move(pairs), d.deepest);
   RoundResult r;
-  r.again = !((round > 0 && d.added + d.raised == 0) || round == settings_.rounds);
+  r.again = !((round > 0 && d.added + d.raised == 0) || unchanged || round == settings_.rounds);
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "contact round %d: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld targets refined%s), "

@@ -194,6 +194,8 @@ class ContactTerm final : public EnergyTerm {
     double beta[3], normal[3], lambda;
   };
   std::vector<Chosen> chosen_;
+  // Per round of this step: its pairs (sample, triangle; sorted) and the deepest sample inside.
+  std::vector<std::pair<std::vector<std::pair<int, int>>, double>> round_pairs_;
   // The detection's steps (contact.cpp).
   struct Positions;
   struct Candidate;
