@@ -296,8 +296,9 @@ TEST(RigFile, TheFastWindingNumberAgreesWithTheExactSumOnAnOpenSkin) {
 
 namespace {
 
-// A scene on Debian's rigged human: its skin filled with cells of `cell`, bones from its joints with
-// 3 cm capsules; `skeleton` adds Skeleton entries, `rest` whole sections (Loading, Solver, Output).
+// A scene on Debian's rigged human: its skin filled with cells of `cell`, bones from its joints (by
+// default from the skin weights); `skeleton` adds Skeleton entries, `rest` whole sections (Loading,
+// Solver, Output).
 std::string rig_scene(const std::string& name, double cell, const std::string& skeleton, const std::string& rest = "") {
   return std::string(R"x(<ParameterList name="Sinew">
   <Parameter name="Scene" type="string" value=")x") + name + R"x("/>
@@ -312,8 +313,7 @@ std::string rig_scene(const std::string& name, double cell, const std::string& s
     <Parameter name="Poisson ratio" type="double" value="0.45"/>
   </ParameterList>
   <ParameterList name="Skeleton">
-    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>
-    <Parameter name="Bone radius" type="double" value="0.03"/>)x" + skeleton + R"x(
+    <Parameter name="Rig" type="string" value=")x" + kEpileptic + R"x("/>)x" + skeleton + R"x(
   </ParameterList>)x" + rest + R"x(
 </ParameterList>)x";
 }
@@ -374,8 +374,10 @@ double bone_error(Simulation& sim, const RigFile& rig, const std::vector<Affine>
 
 TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
   // Debian's rigged human: its three open skin pieces filled by the winding number at 3 cm, bones from
-  // its 54 joints, 0.1 s of its clip in one step.
-  const std::string xml = rig_scene("rig", 0.03, R"x(<Parameter name="Clip end" type="double" value="0.1"/>)x",
+  // its 54 joints as 3 cm capsules, 0.1 s of its clip in one step.
+  const std::string xml = rig_scene("rig", 0.03, R"x(<Parameter name="Clip end" type="double" value="0.1"/>
+    <Parameter name="Bone regions" type="string" value="capsules"/>
+    <Parameter name="Bone radius" type="double" value="0.03"/>)x",
                                      R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
   <ParameterList name="Solver"><Parameter name="Absolute tolerance" type="double" value="1.0e-4"/></ParameterList>
   <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
@@ -438,6 +440,109 @@ TEST(RigScene, TheSkinIsFilledAndEachJointMovesTheNodesNearestToIt) {
               "bone nodes vs the joints' motion: %.1e (moved up to %.3f)\n",
               static_cast<long long>(mesh.global_elements), lattice, enclosed, skeleton.size(), skeleton.unused_joints(),
               skeleton.nonrigid(), err, moved);
+}
+
+TEST(RigScene, BonesComeFromTheSkinWeightsAndLeaveTheFleshAroundEachJointFree) {
+  // By default a joint is a bone where it dominates skin (the vertices whose largest weight is its
+  // own), with a radius of half the median distance from its segment to that skin, and holds only the
+  // nodes of the cylinder over its segment that leaves a gap at both ends; all recomputed here from the
+  // file. A joint listed in 'Skip joints' holds nothing.
+  const std::string xml = rig_scene("rig_bones", 0.03, R"x(<Parameter name="Clip end" type="double" value="0.1"/>
+    <Parameter name="Skip joints" type="string" value="B_Jaw, B_Neck"/>)x",
+                                     R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
+  Simulation sim(test::config(xml, "test_results/rig/bones"), RunOptions{true, ""});
+  const Mesh& mesh = sim.scene().system().mesh();
+  const Skeleton& skeleton = sim.scene().skeleton();
+  const RigFile rig = read_rig_file(kEpileptic);
+  // The dominated skin by brute force: per vertex of every mesh at rest, the joint of its largest weight.
+  std::map<std::string, std::vector<std::array<double, 3>>> dominated;
+  for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
+    const auto x = rig.skin(static_cast<int>(m), nullptr, 0.0);
+    std::vector<double> best(x.size(), 0.0);
+    std::vector<int> owner(x.size(), -1);
+    for (const auto& bone : rig.meshes[m].bones)
+      for (const auto& [v, w] : bone.weights)
+        if (w > best[v]) {
+          best[v] = w;
+          owner[v] = bone.node;
+        }
+    for (std::size_t v = 0; v < x.size(); ++v)
+      if (owner[v] >= 0) dominated[rig.nodes[owner[v]].name].push_back(x[v]);
+  }
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  std::map<std::string, std::size_t> bone_index;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) bone_index[skeleton.name(b)] = b;
+  int bones = 0, skipped = 0, checked_nodes = 0;
+  for (const Skeleton::Joint& j : skeleton.joints()) {
+    const auto& skin = dominated[j.name];
+    EXPECT_EQ(j.dominated, static_cast<long long>(skin.size())) << j.name;
+    if (j.name == "B_Jaw" || j.name == "B_Neck") {
+      EXPECT_FALSE(j.bone) << j.name;
+      EXPECT_NE(j.why.find("Skip joints"), std::string::npos) << j.why;
+      ++skipped;
+      continue;
+    }
+    EXPECT_EQ(j.bone, !skin.empty() && j.nodes > 0) << j.name << ": " << j.why;
+    EXPECT_EQ(j.bone, bone_index.count(j.name) == 1) << j.name;
+    if (!j.bone) continue;
+    ++bones;
+    // Radius: half the median distance of the dominated skin from the segment; gap: the larger of a
+    // cell and the radius, at most 35% of the segment.
+    std::vector<double> d;
+    for (const auto& v : skin) d.push_back(segment_distance(v.data(), j.a, j.b));
+    std::sort(d.begin(), d.end());
+    EXPECT_NEAR(j.radius, 0.5 * d[d.size() / 2], 1e-12) << j.name;
+    const double L = std::sqrt((j.b[0] - j.a[0]) * (j.b[0] - j.a[0]) + (j.b[1] - j.a[1]) * (j.b[1] - j.a[1]) +
+                               (j.b[2] - j.a[2]) * (j.b[2] - j.a[2]));
+    EXPECT_NEAR(j.gap, std::min(std::max(0.03, j.radius), 0.35 * L), 1e-12) << j.name;
+    // The joint's origin is the rig's at rest.
+    const auto origin = rig.pose(nullptr, 0.0)[rig.node_index(j.name)].t;
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(j.a[i], origin[i], 1e-12);
+    for (int n : skeleton.nodes(bone_index[j.name])) {
+      double r[3], along = 0.0, perp2 = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        r[i] = X(n, i) - j.a[i];
+        along += r[i] * (j.b[i] - j.a[i]) / L;
+      }
+      for (int i = 0; i < 3; ++i) perp2 += std::pow(r[i] - along * (j.b[i] - j.a[i]) / L, 2);
+      if (L > 2.0 * j.gap) {
+        EXPECT_GE(along, j.gap - 1e-12) << "node " << n << " of " << j.name << " lies in the free flesh at its joint";
+        EXPECT_LE(along, L - j.gap + 1e-12) << "node " << n << " of " << j.name << " lies in the free flesh at its end";
+        EXPECT_LE(std::sqrt(perp2), j.radius + 1e-12) << "node " << n << " of " << j.name;
+        ++checked_nodes;
+      }
+    }
+  }
+  EXPECT_EQ(skipped, 2);
+  EXPECT_GE(bones, 15);  // limbs, spine and pelvis at least
+  EXPECT_EQ(static_cast<int>(skeleton.size()), bones);
+  EXPECT_EQ(skeleton.size() + skeleton.unused_joints(), 54u);
+  // No lattice node within a cell of a limb's knee or elbow is held (the flesh there folds).
+  for (const char* joint : {"B_Knee_Left", "B_Knee_Right", "B_ForeArm_Left", "B_ForeArm_Right"}) {
+    const auto at = rig.pose(nullptr, 0.0)[rig.node_index(joint)].t;
+    for (std::size_t b = 0; b < skeleton.size(); ++b)
+      for (int n : skeleton.nodes(b)) {
+        const double dist = std::sqrt(std::pow(X(n, 0) - at[0], 2) + std::pow(X(n, 1) - at[1], 2) + std::pow(X(n, 2) - at[2], 2));
+        EXPECT_GT(dist, 0.03) << "node " << n << " of " << skeleton.name(b) << " at the joint " << joint;
+      }
+  }
+  ASSERT_EQ(sim.run(), 0);
+  double moved = 0.0;
+  EXPECT_LT(bone_error(sim, rig, rig.pose(nullptr, 0.0), rig.pose(&rig.clips[0], 0.1), moved), 1e-9);
+  std::printf("[ info ] bones from the skin weights: %d of 54 joints (%d nodes checked in their cylinders); listing:\n%s", bones,
+              checked_nodes, skeleton.joint_listing().c_str());
+}
+
+TEST(RigScene, AJointThatIsNoneOfTheRigsIsNamed) {
+  const std::string xml = rig_scene("rig_skip", 0.04, R"x(<Parameter name="Skip joints" type="string" value="B_Knee_Lefd"/>)x");
+  try {
+    Simulation sim(test::config(xml, "test_results/rig/skip"), RunOptions{true, ""});
+    FAIL() << "a joint name that is not in the file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'Skip joints': \"B_Knee_Lefd\" is not a joint"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("did you mean \"B_Knee_Left\""), std::string::npos) << e.what();
+  }
 }
 
 TEST(RigScene, TheFilesSkinWeightsCanGuideTheFirstGuess) {
@@ -510,8 +615,67 @@ TEST(RigScene, ARestTimeVoxelizesTheSkinAndStartsTheBonesInThatPose) {
     for (int i = 0; i < 3; ++i) still = std::max(still, std::fabs(T.t[i]));
   }
   EXPECT_LT(still, 1e-12);
+  EXPECT_EQ(sim.scene().run_up_steps(), 0);  // the clip starts at rest: nothing to run up
   std::printf("[ info ] rest at 0.8 s: lattice box off the posed skin's by %.3f, the bind pose's by %.3f; bones at load 0 off rest by %.1e\n",
               off_posed, off_bind, still);
+}
+
+TEST(RigScene, ARunUpCarriesTheBonesFromTheRestPoseToTheClipsStart) {
+  // The rest pose at 0.8 s of the clip, the clip from 1.0 s: before step 1 the bones turn from rest to
+  // their pose at 1.0 s over one run-up step per 15 degrees of the largest turn (recomputed here from
+  // the file), each about its centre along the shorter arc; then the clip runs as usual.
+  const std::string xml = rig_scene("rig_run_up", 0.04, R"x(<Parameter name="Rest time" type="double" value="0.8"/>
+    <Parameter name="Clip start" type="double" value="1.0"/>
+    <Parameter name="Clip end" type="double" value="1.02"/>)x",
+                                     R"x(<ParameterList name="Loading"><Parameter name="Steps" type="int" value="1"/></ParameterList>
+  <ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
+  Simulation sim(test::config(xml, "test_results/rig/run_up"), RunOptions{true, ""});
+  Scene& scene = sim.scene();
+  const Skeleton& skeleton = scene.skeleton();
+  const RigFile rig = read_rig_file(kEpileptic);
+  const auto rest = rig.pose(&rig.clips[0], 0.8), start = rig.pose(&rig.clips[0], 1.0);
+  double largest = 0.0;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) {
+    const int j = rig.node_index(skeleton.name(b));
+    const Mat3 R = polar(start[j].A * transpose(rest[j].A));
+    largest = std::max(largest, std::acos(std::clamp(0.5 * (R(0, 0) + R(1, 1) + R(2, 2) - 1.0), -1.0, 1.0)));
+  }
+  EXPECT_NEAR(skeleton.largest_start_rotation(), largest, 1e-5);
+  EXPECT_GT(largest, 15.0 * M_PI / 180.0);  // this start is no small step from rest
+  EXPECT_EQ(scene.run_up_steps(), std::min(10, static_cast<int>(std::ceil(largest / (15.0 * M_PI / 180.0)))));
+  // Along the run-up: rest at s = 0, half the turn about the bone's centre at s = 1/2, the pose at load
+  // 0 at s = 1 (and once the run-up is done).
+  double at_rest = 0.0, halfway = 0.0, at_start = 0.0;
+  for (std::size_t b = 0; b < skeleton.size(); ++b) {
+    const Rigid T = skeleton.transform(b, 0.0);
+    scene.set_run_up(0.0);
+    const Rigid P0 = skeleton.transform(b, 0.0);
+    scene.set_run_up(0.5);
+    const Rigid P = skeleton.transform(b, 0.0);
+    scene.set_run_up(1.0);
+    for (int k = 0; k < 9; ++k) at_rest = std::max(at_rest, std::fabs(P0.R[k] - (k % 4 == 0 ? 1.0 : 0.0)));
+    for (int i = 0; i < 3; ++i) at_rest = std::max(at_rest, std::fabs(P0.t[i]));
+    // Twice the half turn is the whole turn, and a point moves along the chord's middle.
+    const Mat3 twice = P.R * P.R;
+    for (int k = 0; k < 9; ++k) halfway = std::max(halfway, std::fabs(twice[k] - T.R[k]));
+    const auto& n = skeleton.nodes(b);
+    auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), scene.system().mesh().X);
+    std::array<double, 3> c{0.0, 0.0, 0.0};  // the bone's centre: the mean of its nodes (owned: one rank here)
+    for (int nd : n)
+      for (int i = 0; i < 3; ++i) c[i] += X(nd, i) / static_cast<double>(n.size());
+    const auto Pc = P.apply(c), Tc = T.apply(c);
+    for (int i = 0; i < 3; ++i) halfway = std::max(halfway, std::fabs(Pc[i] - 0.5 * (c[i] + Tc[i])));
+    at_start = std::max(at_start, std::fabs(skeleton.transform(b, 0.0).t[0] - T.t[0]));
+  }
+  EXPECT_LT(at_rest, 1e-12);
+  EXPECT_LT(halfway, 1e-9);
+  EXPECT_EQ(at_start, 0.0);
+  // The run: the bones end where the clip puts them at 1.02 s, from rest at 0.8 s.
+  ASSERT_EQ(sim.run(), 0);
+  double moved = 0.0;
+  EXPECT_LT(bone_error(sim, rig, rest, rig.pose(&rig.clips[0], 1.02), moved), 1e-9);
+  std::printf("[ info ] run-up: %d steps for a largest turn of %.1f degrees; halfway off by %.1e; step 1: %d Newton\n",
+              scene.run_up_steps(), largest * 180.0 / M_PI, halfway, sim.records().at(0).solve.newton_iterations);
 }
 
 TEST(RigScene, TheFilesOwnSkinIsWrittenBesideTheSimulatedOne) {

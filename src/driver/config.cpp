@@ -6,6 +6,9 @@
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/rig_file.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
+#include <sinew/scenes/scene.hpp>
+
+#include <Tpetra_Core.hpp>
 
 #include <algorithm>
 #include <filesystem>
@@ -221,12 +224,26 @@ std::string describe(const SceneConfig& c) {
          << "\n";
     }
   }
-  os << "solver: |F| < " << p.solver.absolute_tolerance << ", at most " << p.solver.max_iterations
+  os << "solver: |F| < " << (p.solver.absolute_tolerance > 0.0 ? std::to_string(p.solver.absolute_tolerance) : "max(1e-2, 1e-6 (mu_L + lambda_L) h^2)")
+     << ", at most " << p.solver.max_iterations
      << " Newton iterations, line search " << nox_name(p.solver.line_search) << " on the "
      << (p.solver.merit == SolverParameters::Merit::Energy ? "energy" : "residual") << ", CG with "
      << stratimikos_name(p.solver.preconditioner) << "\n";
   os << "output: " << (p.output.directory.empty() ? "results/" + p.scene : p.output.directory) << "\n";
   return os.str();
+}
+
+std::string describe_joints(const SceneConfig& c) {
+  if (c.params.skeleton.rig.empty()) return "";
+  auto comm = Tpetra::getDefaultComm();
+  const SceneDescription d = c.scene();
+  try {
+    const Mesh mesh = build_scene_mesh(d.mesh, *comm);
+    const Skeleton skeleton(d.skeleton, mesh, *comm, "Skeleton");
+    return skeleton.joint_listing();
+  } catch (const InputError& e) {
+    throw e.prefixed(c.file + ": ");
+  }
 }
 
 }  // namespace sinew

@@ -189,7 +189,8 @@ int main(int argc, char** argv) {
     if (!cl.output.empty()) scene.params.output.directory = cl.output;
     if (cl.check) {
       sinew::check_mesh_file(scene);
-      if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene);
+      const std::string joints = sinew::describe_joints(scene);  // collective: builds the lattice
+      if (root) std::cout << "Sinew: " << sinew::execution_space_summary() << "\n" << sinew::describe(scene) << joints;
       return 0;
     }
     sinew::install_signal_handlers();

@@ -168,9 +168,11 @@ void Simulation::print_header() const {
   std::printf("  material: %s\n", describe(sys.material()).c_str());
   if (!config_.params.skeleton.rig.empty()) {
     const Skeleton& sk = scene_->skeleton();
-    std::printf("  skeleton: %zu bones from the joints of %s (%d joint%s hold no node); motion made rigid to %.1e\n", sk.size(),
-                config_.params.skeleton.rig.c_str(), sk.unused_joints(), sk.unused_joints() == 1 ? "" : "s", sk.nonrigid());
+    std::printf("  skeleton: %s; motion made rigid to %.1e\n", sk.joint_summary().c_str(), sk.nonrigid());
   }
+  if (scene_->run_up_steps() > 0 && at_.step == 0 && at_.load == 0.0)
+    std::printf("  run-up: %d step%s from the rest pose to load 0 (a bone turns by up to %.0f degrees)\n", scene_->run_up_steps(),
+                scene_->run_up_steps() == 1 ? "" : "s", scene_->skeleton().largest_start_rotation() * 180.0 / M_PI);
   std::printf("  %d load step%s; converged when |F| < %g; results in %s\n", scene_->steps(), scene_->steps() > 1 ? "s" : "",
               solver_->absolute_tolerance(), out_->directory().c_str());
   if (at_.step > 0 || at_.load > 0.0)
@@ -266,6 +268,67 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   return StepOutcome::Done;
 }
 
+Simulation::StepOutcome Simulation::run_up() {
+  // Quasi-static steps (no inertia: a dynamic run's time has not started) that carry the bones from the
+  // rest pose to their pose at load 0, cut in half on failure; the state reached is the run's start.
+  Scene& scene = *scene_;
+  const int R = scene.run_up_steps();
+  if (R == 0) return StepOutcome::Done;
+  auto trial = scene.system().create_vector();
+  double s = 0.0, ds = 1.0 / R;
+  int cuts = 0, step = 0;
+  std::vector<double> residuals, failed_before;
+  while (s < 1.0 - 1e-14) {
+    const double s1 = std::min(1.0, s + ds);
+    trial->assign(*u_);
+    scene.predict_run_up(s, s1, *trial);
+    scene.set_run_up(s1);
+    scene.system().begin_step(StepStart{0.0, 0.0, u_.get(), true});
+    scene.apply_load(0.0, *trial);
+    if (talk_) {
+      std::printf("run-up %d/%d  the bones %.3g of the way from the rest pose%s\n", ++step, R, s1, cuts ? "  (after a cut)" : "");
+      std::fflush(stdout);
+    }
+    residuals.clear();
+    auto progress = [&](const NewtonIterate& it) {
+      residuals.push_back(it.residual);
+      out_->log_newton(0, 0.0, it);
+      if (!talk_) return;
+      std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations, it.step,
+                  it.exact_hessian ? "  (exact Hessian)" : "");
+      std::fflush(stdout);
+    };
+    StepRecord rec;
+    const SolveReport r = solve(*trial, progress, rec);
+    if (r.converged()) {
+      scene.system().end_step(*trial);
+      u_->assign(*trial);
+      s = s1;
+      failed_before.clear();
+      if (talk_) {
+        std::printf("  converged: %d Newton, %d CG; %.2f s\n", r.newton_iterations, r.linear_iterations, r.seconds_total);
+        std::fflush(stdout);
+      }
+      continue;
+    }
+    scene.system().abandon_step();
+    scene.set_run_up(s);
+    if (r.status == SolveStatus::Interrupted) return StepOutcome::Stopped;
+    if (cuts >= scene.max_cuts() || same_path(residuals, failed_before)) {
+      if (comm_->getRank() == 0)
+        std::fprintf(stderr,
+                     "sinew: the run-up from the rest pose to load 0 did not converge %.3g of the way, after %d cut%s (%s); "
+                     "give the rest pose nearer the clip's start ('Rest time') or more 'Run-up steps'\n",
+                     s1, cuts, cuts == 1 ? "" : "s", r.reason().c_str());
+      return StepOutcome::Failed;
+    }
+    failed_before = residuals;
+    ++cuts;
+    ds *= 0.5;
+  }
+  return StepOutcome::Done;
+}
+
 SolveReport Simulation::solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress,
                               StepRecord& rec) {
   System& sys = scene_->system();
@@ -350,6 +413,18 @@ int Simulation::run() {
                     (!initial_given_ && config_.params.loading.initial == LoadingParameters::Initial::Rest);
   if (opt_.restart_file.empty()) {
     if (!initial_given_) scene.initial_state(u);
+    const StepOutcome outcome = run_up();
+    if (outcome != StepOutcome::Done) {
+      // Nothing of the run has happened: the state where the run-up stopped, and no checkpoint (a
+      // restart would start without the bones' run-up).
+      write_step(0, 0.0);
+      out.finish();
+      if (outcome == StepOutcome::Stopped) {
+        if (comm_->getRank() == 0) std::fprintf(stderr, "sinew: stopped by signal %d during the run-up\n", stop_signal_);
+        return signal_exit_code(stop_signal_);
+      }
+      return code(ExitCode::NoConvergence);
+    }
     write_step(0, 0.0);
   }
   const int n = scene.steps();

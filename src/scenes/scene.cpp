@@ -195,6 +195,12 @@ void Scene::predict(double t0, double t1, Vector& u) const {
   skeleton_->skin(t0, t1, X_.data(), free_, v.data(), system_->mesh().n_owned_nodes);
 }
 
+void Scene::predict_run_up(double s0, double s1, Vector& u) const {
+  if (skeleton_->empty() || !skeleton_->skinning()) return;
+  auto v = u.getLocalViewHost(Tpetra::Access::ReadWrite);
+  skeleton_->skin_run_up(s0, s1, X_.data(), free_, v.data(), system_->mesh().n_owned_nodes);
+}
+
 void Scene::initial_velocity(Vector& v) const {
   const Mesh& m = system_->mesh();
   double local[4] = {0, 0, 0, static_cast<double>(m.n_owned_nodes)}, c[4];

@@ -2,6 +2,7 @@
 // linear-blend-skinning predictor for each load step.
 #include <sinew/core/collective.hpp>
 #include <sinew/core/sym_eigen.hpp>
+#include <sinew/core/validation.hpp>
 #include <sinew/core/xml_input.hpp>
 #include <sinew/discretization/rig_file.hpp>
 #include <sinew/scenes/skeleton.hpp>
@@ -166,36 +167,296 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
       throw e.prefixed(where + ": ");
     }
   }
-  const JointSegments segments = joint_segments(rig, rest);
-  if (segments.joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
-  // The capsule radius: 1.5 cells unless given (the lattice is uniform: any element's edge).
+  // The lattice's cell size (uniform: any element's edge).
   double h = 0.0;
   auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
   auto Ch = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.conn);
   if (mesh.local_elements() > 0)
     for (int d = 0; d < 3; ++d) h = std::max(h, std::fabs(Xh(Ch(0, 1), d) - Xh(Ch(0, 0), d)));
   MPI_Allreduce(MPI_IN_PLACE, &h, 1, MPI_DOUBLE, MPI_MAX, raw_comm(comm));
-  const double radius = p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h;
-  std::vector<std::vector<int>> nodes = capsule_nodes(mesh, segments, radius);
+  rig_path_ = p.rig;
+  cell_ = h;
+  // Which joints hold flesh, and where: from the skin's weights (the default) or a capsule per joint.
+  const RestSkin skin = rest_skin(rig, rest_clip, p.rest_time);
+  const JointSegments segments = p.bone_regions == SkeletonParameters::BoneRegions::Capsules
+                                     ? capsule_segments(rig, rest, p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h)
+                                     : weighted_segments(rig, rest, skin, h, p, where);
+  if (segments.joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
+  std::vector<std::vector<int>> nodes = region_nodes(mesh, segments);
   std::vector<std::vector<Rigid>> frames = sample_frames(segments, rest, p.sample_rate);
-  // Joints whose capsule holds no node anywhere (a finger thinner than the cells) are no bones.
+  // Joints whose region holds no node anywhere (a finger thinner than the cells) are no bones.
   std::vector<long long> count(segments.joints.size());
   for (std::size_t j = 0; j < segments.joints.size(); ++j)
     for (int n : nodes[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
   MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(count.size()), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
   for (std::size_t j = 0; j < segments.joints.size(); ++j) {
-    if (count[j] == 0) {
+    Joint report;
+    report.name = rig.nodes[segments.joints[j]].name;
+    report.why = segments.why[j];
+    report.nodes = count[j];
+    report.dominated = segments.dominated[j];
+    report.radius = segments.radius[j];
+    report.gap = segments.gap[j];
+    report.a = segments.a[j];
+    report.b = segments.b[j];
+    double L2 = 0.0;
+    for (int i = 0; i < 3; ++i) L2 += (segments.b[j][i] - segments.a[j][i]) * (segments.b[j][i] - segments.a[j][i]);
+    report.length = std::sqrt(L2);
+    report.bone = segments.candidate[j] && count[j] > 0;
+    if (segments.candidate[j] && count[j] == 0) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "too thin for the lattice: its region (radius %.3g m) holds no node of the %.3g m cells",
+                    segments.radius[j], h);
+      report.why = buf;
+    }
+    joints_.push_back(report);
+    if (!report.bone) {
       ++unused_joints_;
       continue;
     }
     Bone bone;
-    bone.name = rig.nodes[segments.joints[j]].name;
+    bone.name = report.name;
     bone.frames = std::move(frames[j]);
     bone.nodes = std::move(nodes[j]);
     bones_.push_back(std::move(bone));
   }
-  if (bones_.empty()) throw InputError(where + ": no joint of " + p.rig + " holds a lattice node within 'Bone radius' " + std::to_string(radius));
-  if (p.rig_weights) rig_weights_ = skin_weights(mesh, rest_clip, p.rest_time);
+  if (bones_.empty())
+    throw InputError(where + ": no joint of " + p.rig + " holds a lattice node (the cells are " + std::to_string(h) +
+                     " m; 'sinew --check' lists each joint and why)");
+  if (p.rig_weights) rig_weights_ = skin_weights(mesh, skin);
+}
+
+namespace {
+
+std::vector<std::string> comma_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) {
+    item.erase(0, item.find_first_not_of(" \t\n"));
+    item.erase(item.find_last_not_of(" \t\n") + 1);
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+}  // namespace
+
+Skeleton::RestSkin Skeleton::rest_skin(const RigFile& rig, const RigClip* rest_clip, double rest_time) {
+  RestSkin skin;
+  for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
+    const auto x = rig.skin(static_cast<int>(m), rest_clip, rest_time);
+    std::vector<std::vector<std::pair<int, double>>> w(x.size());
+    for (const auto& bone : rig.meshes[m].bones)
+      for (const auto& [v, wt] : bone.weights)
+        if (wt > 0.0) w[v].emplace_back(bone.node, wt);
+    skin.x.insert(skin.x.end(), x.begin(), x.end());
+    skin.w.insert(skin.w.end(), w.begin(), w.end());
+  }
+  return skin;
+}
+
+Skeleton::JointSegments Skeleton::capsule_segments(const RigFile& rig, const std::vector<Affine>& rest, double radius) {
+  // Each joint's segment at rest: from its origin to its first child joint's (a point for a leaf).
+  JointSegments s;
+  for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
+    if (!rig.nodes[n].joint) continue;
+    s.joints.push_back(static_cast<int>(n));
+    s.a.push_back(rest[n].t);
+    s.b.push_back(rest[n].t);
+    for (std::size_t c = n + 1; c < rig.nodes.size(); ++c)
+      if (rig.nodes[c].parent == static_cast<int>(n) && rig.nodes[c].joint) {
+        s.b.back() = rest[c].t;
+        break;
+      }
+    s.radius.push_back(radius);
+    s.gap.push_back(0.0);
+    s.capped.push_back(0);
+    s.candidate.push_back(1);
+    s.why.push_back("moves skin (capsules)");
+    s.dominated.push_back(0);
+  }
+  return s;
+}
+
+Skeleton::JointSegments Skeleton::weighted_segments(const RigFile& rig, const std::vector<Affine>& rest, const RestSkin& skin,
+                                                    double h, const SkeletonParameters& p, const std::string& where) {
+  // The skin a joint dominates: the vertices whose largest weight is its own. A joint that dominates
+  // none (a facial control, a helper, a tail whose mesh is absent) holds no flesh.
+  const std::size_t N = rig.nodes.size();
+  std::vector<long long> dominated(N, 0);
+  std::vector<std::array<double, 3>> centroid(N, {0.0, 0.0, 0.0});
+  std::vector<int> owner(skin.x.size(), -1);
+  for (std::size_t v = 0; v < skin.x.size(); ++v) {
+    double best = 0.0;
+    for (const auto& [node, w] : skin.w[v])
+      if (w > best) {
+        best = w;
+        owner[v] = node;
+      }
+    if (owner[v] < 0) continue;
+    ++dominated[owner[v]];
+    for (int i = 0; i < 3; ++i) centroid[owner[v]][i] += skin.x[v][i];
+  }
+  // The user's lists, each name a joint of the file.
+  auto listed = [&](const std::string& text, const char* entry) {
+    std::vector<char> in(N, 0);
+    for (const std::string& name : comma_names(text)) {
+      const int n = rig.node_index(name);
+      if (n < 0 || !rig.nodes[n].joint) {
+        std::vector<std::string> names;
+        for (const auto& node : rig.nodes)
+          if (node.joint) names.push_back(node.name);
+        const std::string near = closest_name(name, names);
+        throw InputError(where + ": '" + entry + "': \"" + name + "\" is not a joint of " + rig.path + " that moves skin" +
+                         (near.empty() ? "" : " (did you mean \"" + near + "\"?)"));
+      }
+      in[n] = 1;
+    }
+    return in;
+  };
+  const std::vector<char> skip = listed(p.skip_joints, "Skip joints"), include = listed(p.include_joints, "Include joints");
+  JointSegments s;
+  std::vector<double> d;
+  for (std::size_t n = 0; n < N; ++n) {
+    if (!rig.nodes[n].joint) continue;
+    const auto a = rest[n].t;
+    std::array<double, 3> b = a;
+    std::vector<std::array<double, 3>> children;
+    for (std::size_t c = n + 1; c < N; ++c)
+      if (rig.nodes[c].parent == static_cast<int>(n) && rig.nodes[c].joint) children.push_back(rest[c].t);
+    s.joints.push_back(static_cast<int>(n));
+    s.dominated.push_back(dominated[n]);
+    if (skip[n] || (dominated[n] == 0 && !include[n])) {
+      s.a.push_back(a);
+      s.b.push_back(children.empty() ? a : children.front());
+      s.radius.push_back(0.0);
+      s.gap.push_back(0.0);
+      s.capped.push_back(0);
+      s.candidate.push_back(0);
+      s.why.push_back(skip[n] ? "skipped: listed in 'Skip joints'" : "dominates no skin: no skin vertex has its largest weight here");
+      continue;
+    }
+    if (dominated[n] == 0) {  // included by name: a capsule to its first child, as 'Bone regions' capsules
+      s.a.push_back(a);
+      s.b.push_back(children.empty() ? a : children.front());
+      s.radius.push_back(p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h);
+      s.gap.push_back(0.0);
+      s.capped.push_back(0);
+      s.candidate.push_back(1);
+      s.why.push_back("included ('Include joints'), dominates no skin vertex");
+      continue;
+    }
+    // The segment: to the child joint nearest the middle of the dominated skin (a limb's next joint),
+    // else, for a leaf or children at the joint itself, to that middle.
+    std::array<double, 3> c = centroid[n];
+    for (double& v : c) v /= static_cast<double>(dominated[n]);
+    double best = HUGE_VAL;
+    for (const auto& child : children)
+      if (distance(child, a) >= 0.5 * h && distance(child, c) < best) {
+        best = distance(child, c);
+        b = child;
+      }
+    if (best == HUGE_VAL) b = c;
+    // The local thickness: the median distance from the segment to the dominated skin.
+    d.clear();
+    for (std::size_t v = 0; v < skin.x.size(); ++v)
+      if (owner[v] == static_cast<int>(n)) d.push_back(segment_distance(skin.x[v].data(), a, b));
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    const double thickness = d[d.size() / 2];
+    const double radius = p.bone_radius > 0.0 ? p.bone_radius : p.bone_thickness * thickness;
+    const double L = distance(a, b);
+    s.a.push_back(a);
+    s.b.push_back(b);
+    s.radius.push_back(radius);
+    s.gap.push_back(std::min(p.joint_gap > 0.0 ? p.joint_gap : std::max(h, radius), 0.35 * L));
+    s.capped.push_back(1);
+    s.candidate.push_back(1);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "dominates %lld skin vertices, flesh %.3g m thick", dominated[n], thickness);
+    s.why.push_back(buf);
+  }
+  return s;
+}
+
+std::vector<std::vector<int>> Skeleton::region_nodes(const Mesh& mesh, const JointSegments& s) {
+  // Each node to the joint whose region holds it most deeply (distance over radius): production rigs'
+  // regions overlap.
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  std::vector<std::vector<int>> nodes(s.joints.size());
+  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
+    const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
+    int best = -1;
+    double best_q = 1.0;
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      if (!s.candidate[j] || !(s.radius[j] > 0.0)) continue;
+      double dist;
+      if (!s.capped[j]) {
+        dist = segment_distance(X, s.a[j], s.b[j]);
+      } else {
+        // A cylinder over the segment without 'gap' at either end (a ball at the middle of a segment
+        // too short for both gaps).
+        const auto &a = s.a[j], &b = s.b[j];
+        const double L = distance(a, b), g = s.gap[j];
+        const double r[3] = {X[0] - a[0], X[1] - a[1], X[2] - a[2]};
+        if (L - 2.0 * g <= 1e-12 * (L + 1.0)) {
+          const std::array<double, 3> m{0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+          dist = distance({X[0], X[1], X[2]}, m);
+        } else {
+          const double u[3] = {(b[0] - a[0]) / L, (b[1] - a[1]) / L, (b[2] - a[2]) / L};
+          const double along = r[0] * u[0] + r[1] * u[1] + r[2] * u[2];
+          if (along < g || along > L - g) continue;
+          double perp2 = 0.0;
+          for (int i = 0; i < 3; ++i) perp2 += (r[i] - along * u[i]) * (r[i] - along * u[i]);
+          dist = std::sqrt(perp2);
+        }
+      }
+      const double q = dist / s.radius[j];
+      if (q <= best_q) {
+        best_q = q;
+        best = static_cast<int>(j);
+      }
+    }
+    if (best >= 0) nodes[best].push_back(static_cast<int>(n));
+  }
+  return nodes;
+}
+
+std::string Skeleton::joint_listing() const {
+  std::string out = "joints of " + rig_path_ + " (bone or not, lattice nodes held, radius, free flesh at each end):\n";
+  std::size_t w = 0;
+  for (const Joint& j : joints_) w = std::max(w, j.name.size());
+  for (const Joint& j : joints_) {
+    char buf[256];
+    if (j.bone)
+      std::snprintf(buf, sizeof buf, "  %-*s  bone  %6lld nodes  radius %.3g m  gap %.3g m  length %.3g m  (%s)\n", static_cast<int>(w),
+                    j.name.c_str(), j.nodes, j.radius, j.gap, j.length, j.why.c_str());
+    else
+      std::snprintf(buf, sizeof buf, "  %-*s  no    %s\n", static_cast<int>(w), j.name.c_str(), j.why.c_str());
+    out += buf;
+  }
+  return out;
+}
+
+std::string Skeleton::joint_summary() const {
+  // "32 bones from the joints of F (22 joints hold no flesh: 14 dominate no skin vertex, ...)"
+  std::map<std::string, int> why;
+  for (const Joint& j : joints_)
+    if (!j.bone) ++why[j.why.substr(0, j.why.find(':'))];
+  std::string out = std::to_string(bones_.size()) + " bones from the joints of " + rig_path_;
+  if (unused_joints_ > 0) {
+    out += " (" + std::to_string(unused_joints_) + " joint" + (unused_joints_ == 1 ? "" : "s") + " hold no flesh:";
+    bool first = true;
+    for (const auto& [reason, k] : why) {
+      out += (first ? " " : ", ") + std::to_string(k) + " " + reason;
+      first = false;
+    }
+    out += ")";
+  }
+  return out;
 }
 
 const RigClip* Skeleton::read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where) {
@@ -231,43 +492,6 @@ const RigClip* Skeleton::read_rig_and_clip(const SkeletonParameters& p, const Te
   return rest_clip;
 }
 
-Skeleton::JointSegments Skeleton::joint_segments(const RigFile& rig, const std::vector<Affine>& rest) {
-  // Each joint's segment at rest: from its origin to its first child joint's (a point for a leaf).
-  JointSegments s;
-  for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
-    if (!rig.nodes[n].joint) continue;
-    s.joints.push_back(static_cast<int>(n));
-    s.a.push_back(rest[n].t);
-    s.b.push_back(rest[n].t);
-    for (std::size_t c = n + 1; c < rig.nodes.size(); ++c)
-      if (rig.nodes[c].parent == static_cast<int>(n) && rig.nodes[c].joint) {
-        s.b.back() = rest[c].t;
-        break;
-      }
-  }
-  return s;
-}
-
-std::vector<std::vector<int>> Skeleton::capsule_nodes(const Mesh& mesh, const JointSegments& s, double radius) {
-  // Nodes to the nearest capsule that holds them (production rigs' capsules overlap).
-  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
-  std::vector<std::vector<int>> nodes(s.joints.size());
-  for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
-    const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
-    int best = -1;
-    double best_d = radius;
-    for (std::size_t j = 0; j < s.joints.size(); ++j) {
-      const double d = segment_distance(X, s.a[j], s.b[j]);
-      if (d <= best_d) {
-        best_d = d;
-        best = static_cast<int>(j);
-      }
-    }
-    if (best >= 0) nodes[best].push_back(static_cast<int>(n));
-  }
-  return nodes;
-}
-
 std::vector<std::vector<Rigid>> Skeleton::sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate) {
   // The clip sampled into frames over the load; each joint's motion from rest made rigid about its
   // origin (a production rig may scale or shear: the departure is kept for the run's header).
@@ -288,25 +512,18 @@ std::vector<std::vector<Rigid>> Skeleton::sample_frames(const JointSegments& s, 
   return frames;
 }
 
-std::vector<std::vector<std::pair<int, double>>> Skeleton::skin_weights(const Mesh& mesh, const RigClip* rest_clip,
-                                                                         double rest_time) const {
+std::vector<std::vector<std::pair<int, double>>> Skeleton::skin_weights(const Mesh& mesh, const RestSkin& skin) const {
   // The file's own skinning weights for the first guess: each owned node takes those of the nearest
   // skin vertex at rest, over the joints that became bones (renormalized; none left: distance weights).
   const RigFile& rig = *rig_;
   auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
   std::vector<int> bone_of(rig.nodes.size(), -1);
   for (std::size_t k = 0; k < bones_.size(); ++k) bone_of[rig.node_index(bones_[k].name)] = static_cast<int>(k);
-  std::vector<std::array<double, 3>> vx;
-  std::vector<std::vector<std::pair<int, double>>> vw;
-  for (std::size_t m = 0; m < rig.meshes.size(); ++m) {
-    const auto x = rig.skin(static_cast<int>(m), rest_clip, rest_time);
-    std::vector<std::vector<std::pair<int, double>>> w(x.size());
-    for (const auto& bone : rig.meshes[m].bones)
-      if (bone_of[bone.node] >= 0)
-        for (const auto& [v, wt] : bone.weights) w[v].emplace_back(bone_of[bone.node], wt);
-    vx.insert(vx.end(), x.begin(), x.end());
-    vw.insert(vw.end(), w.begin(), w.end());
-  }
+  const auto& vx = skin.x;
+  std::vector<std::vector<std::pair<int, double>>> vw(vx.size());
+  for (std::size_t v = 0; v < vx.size(); ++v)
+    for (const auto& [node, wt] : skin.w[v])
+      if (bone_of[node] >= 0) vw[v].emplace_back(bone_of[node], wt);
   std::vector<std::vector<std::pair<int, double>>> weights(mesh.n_owned_nodes);
 #pragma omp parallel for schedule(dynamic, 64)
   for (long long n = 0; n < static_cast<long long>(mesh.n_owned_nodes); ++n) {
@@ -405,8 +622,10 @@ Skeleton::Skeleton(const SkeletonParameters& p, const Mesh& mesh, const Teuchos:
     for (int i = 0; i < 3; ++i) {
       b.seg_a[i] = m[i] + ext[0] * axis[i];
       b.seg_b[i] = m[i] - ext[1] * axis[i];
+      b.centre[i] = m[i];
     }
   }
+  plan_run_up(p.run_up);
   // Skinning weights of the owned nodes: 1/d^p to each bone, normalized; small ones dropped.
   weights_.assign(mesh.n_owned_nodes, {});
   if (bones_.empty()) return;
@@ -446,16 +665,71 @@ Rigid Skeleton::local(const Bone& b, double t) const {
   return b.track.pose(t);
 }
 
-Rigid Skeleton::transform(std::size_t b, double t) const {
+Rigid Skeleton::posed(std::size_t b, double t) const {
   const Bone& bone = bones_[b];
   const Rigid L = local(bone, t);
   if (bone.parent < 0 || !bone.frames.empty()) return L;
-  return transform(static_cast<std::size_t>(bone.parent), t).after(L);
+  return posed(static_cast<std::size_t>(bone.parent), t).after(L);
+}
+
+Rigid Skeleton::transform(std::size_t b, double t) const {
+  if (run_up_ < 1.0 && t <= 0.0) return run_up_pose(b, run_up_);
+  return posed(b, t);
+}
+
+Rigid Skeleton::run_up_pose(std::size_t b, double s) const {
+  // x -> R_s (x - c) + c + s (T(c) - c), R_s = slerp(I, R, s): the bone's centre c on a straight line.
+  const Rigid T = posed(b, 0.0);
+  const auto& c = bones_[b].centre;
+  const auto Tc = T.apply(c);
+  Rigid P;
+  P.R = slerp(Mat3::identity(), T.R, s);
+  const auto Rc = P.apply(c);
+  for (int i = 0; i < 3; ++i) P.t[i] = c[i] - Rc[i] + s * (Tc[i] - c[i]);
+  return P;
+}
+
+void Skeleton::plan_run_up(int steps) {
+  // The largest rotation of a bone from rest to load 0 sets the automatic count: one step per 15 degrees
+  // (at most 10); none when every bone starts at rest.
+  // (A shift of the bones' centres counts by how far it departs from their mean shift: a character
+  // placed elsewhere in the world moves rigidly, which the skinning guess carries exactly.)
+  double angle = 0.0, shift = 0.0;
+  std::array<double, 3> mean{0.0, 0.0, 0.0};
+  std::vector<std::array<double, 3>> d(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    const Rigid T = posed(b, 0.0);
+    const double c = std::clamp(0.5 * (T.R(0, 0) + T.R(1, 1) + T.R(2, 2) - 1.0), -1.0, 1.0);
+    angle = std::max(angle, std::acos(c));
+    const auto Tc = T.apply(bones_[b].centre);
+    for (int i = 0; i < 3; ++i) {
+      d[b][i] = Tc[i] - bones_[b].centre[i];
+      mean[i] += d[b][i] / static_cast<double>(bones_.size());
+    }
+  }
+  for (const auto& db : d) shift = std::max(shift, distance(db, mean));
+  start_rotation_ = angle;
+  if (steps >= 0)
+    run_up_steps_ = steps;
+  else if (angle < M_PI / 180.0 && shift <= 0.25 * cell_)  // the skinning guess covers a degree or a rigid shift
+    run_up_steps_ = 0;
+  else
+    run_up_steps_ = std::clamp(static_cast<int>(std::ceil(angle / (15.0 * M_PI / 180.0))), 1, 10);
 }
 
 void Skeleton::skin(double t0, double t1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const {
   std::vector<Rigid> M(bones_.size());
   for (std::size_t b = 0; b < bones_.size(); ++b) M[b] = transform(b, t1).after(transform(b, t0).inverse());
+  skin_by(M, X, free, u, owned);
+}
+
+void Skeleton::skin_run_up(double s0, double s1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const {
+  std::vector<Rigid> M(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) M[b] = run_up_pose(b, s1).after(run_up_pose(b, s0).inverse());
+  skin_by(M, X, free, u, owned);
+}
+
+void Skeleton::skin_by(const std::vector<Rigid>& M, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const {
   for (std::size_t n = 0; n < owned; ++n) {
     if (!free[n] || weights_[n].empty()) continue;
     const std::array<double, 3> x{X[3 * n] + u[3 * n], X[3 * n + 1] + u[3 * n + 1], X[3 * n + 2] + u[3 * n + 2]};

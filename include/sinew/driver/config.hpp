@@ -71,4 +71,8 @@ std::string parameter_reference();
 // Human-readable summary of a scene (sinew --check).
 std::string describe(const SceneConfig& scene);
 
+// A skeleton from a rig: each joint, bone or not (and why), the lattice nodes it holds, its radius and
+// the gaps at its ends, for sinew --check; empty without a Rig. Builds the mesh (collective).
+std::string describe_joints(const SceneConfig& scene);
+
 }  // namespace sinew

@@ -54,6 +54,8 @@ class Simulation {
   void print_header() const;
   // Advances the state through load step k, cutting the increment when a solve fails.
   StepOutcome advance(int k, StepRecord& rec);
+  // The bones' run-up from the rest pose to load 0 before step 1 (Scene::run_up_steps).
+  StepOutcome run_up();
   // Solves for the step's state from trial (its prescribed values set): rounds of the terms (System::round: contact's detection
   // and tractions) and solves until no term asks for another.
   SolveReport solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);

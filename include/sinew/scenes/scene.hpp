@@ -152,6 +152,12 @@ class Scene {
   void predict(double t0, double t1, Vector& u) const;
   const Skeleton& skeleton() const { return *skeleton_; }
 
+  // The run-up before step 1 (skeleton.hpp): its steps, the bones at s of the way from the rest pose to
+  // load 0 (1: done), and the skinning guess from s0 to s1.
+  int run_up_steps() const { return skeleton_->run_up_steps(); }
+  void set_run_up(double s) { skeleton_->set_run_up(s); }
+  void predict_run_up(double s0, double s1, Vector& u) const;
+
   // The starting displacement: zero, or the "scramble" of the paper's Fig. 3.
   void initial_state(Vector& u) const;
   // The starting velocity of a dynamic run: Time/Initial velocity plus Initial spin x (X - centroid).

@@ -91,6 +91,11 @@ struct SkeletonParameters {
   enum class Attachment { Fixed, Soft };
   Attachment attachment = Attachment::Fixed;
   double bone_stiffness = 0.0;
+  enum class BoneRegions { SkinWeights, Capsules };
+  BoneRegions bone_regions = BoneRegions::SkinWeights;
+  double bone_thickness = 0.5, joint_gap = 0.0;
+  std::string skip_joints, include_joints;
+  int run_up = -1;
 
   template <class V>
   void visit(V& v) {
@@ -127,7 +132,34 @@ struct SkeletonParameters {
             "voxelized in it and the bones move from it; negative: the file's bind pose. A pose with the arms away "
             "from the body keeps a hand from fusing with a thigh");
     v.entry("Clip end", clip_end, -1.0, "the clip's time, in seconds, at load 1 (negative: the clip's end)");
-    v.entry("Bone radius", bone_radius, 0.0, "the radius of a joint's capsule (0: 1.5 lattice cells)", Range::non_negative());
+    v.choice("Bone regions", bone_regions, BoneRegions::SkinWeights,
+             Choices<BoneRegions>{{"skin weights", BoneRegions::SkinWeights}, {"capsules", BoneRegions::Capsules}},
+             "which joints of a Rig hold flesh, and which: skin weights (a joint is a bone where it dominates skin "
+             "vertices; it holds the lattice nodes within 'Bone thickness' times the local flesh thickness of its "
+             "segment, leaving 'Joint gap' free at both ends so that a bent joint folds flesh instead of crushing it) or "
+             "capsules (every joint that moves skin holds the nodes within 'Bone radius' of its segment; neighbouring "
+             "capsules meet at the joints)");
+    v.entry("Bone thickness", bone_thickness, 0.5,
+            "skin weights: a bone's radius as a fraction of the median distance from its segment to the skin it "
+            "dominates (unless 'Bone radius' is given)",
+            Range::open_closed(0.0, 1.0));
+    v.entry("Joint gap", joint_gap, 0.0,
+            "skin weights: the flesh left free at each end of a bone, in metres (0: the larger of a cell and the bone's "
+            "radius, at most 35% of the segment)",
+            Range::non_negative());
+    v.entry("Skip joints", skip_joints, std::string(""), "joints (comma-separated names) that hold no flesh even where they dominate skin");
+    v.entry("Include joints", include_joints, std::string(""),
+            "joints (comma-separated names) that are bones although they dominate no skin (a capsule of 'Bone radius', "
+            "or 1.5 cells, to their first child joint)");
+    v.entry("Run-up steps", run_up, -1,
+            "load steps before the clip starts in which the bones move from the rest pose to the clip's first frame "
+            "(quasi-static, also before a dynamic run's time starts), so that step 1 is no jump; negative: one per 15 "
+            "degrees of the largest joint rotation (at most 10), none when the clip starts at rest",
+            Range::closed(-1, 1000));
+    v.entry("Bone radius", bone_radius, 0.0,
+            "the radius of a joint's bone (0: with skin weights, from the local flesh thickness ('Bone thickness'); "
+            "with capsules, 1.5 lattice cells)",
+            Range::non_negative());
     v.entry("Clip samples per second", sample_rate, 30.0, "how densely the clip is sampled into frames (slerp between them)",
             Range::closed(1.0, 10000.0));
     v.entry("Rig skinning weights", rig_weights, false,
@@ -166,6 +198,28 @@ class Skeleton {
   // The skinning guess's weights of an owned node: (bone, weight), summing to 1.
   const std::vector<std::pair<int, double>>& weights(std::size_t owned_node) const { return weights_.at(owned_node); }
   double nonrigid() const { return nonrigid_; }
+  // A skeleton from a rig: what became of each joint that moves skin (bone or not, and why; nodes held,
+  // radius, gap at its ends), listed by --check; and a one-line count for the run's header.
+  struct Joint {
+    std::string name, why;
+    bool bone = false;
+    long long nodes = 0, dominated = 0;  // lattice nodes held; skin vertices whose largest weight is this joint's
+    double radius = 0.0, gap = 0.0, length = 0.0;
+    std::array<double, 3> a{}, b{};  // its segment at rest: from the joint's origin
+  };
+  const std::vector<Joint>& joints() const { return joints_; }
+  std::string joint_listing() const;
+  std::string joint_summary() const;
+
+  // The run-up (Sec. "From the rest pose to the clip" of the README): before step 1 the bones move from
+  // the rest pose (s = 0) to their pose at load 0 (s = 1) over run_up_steps() quasi-static steps. While
+  // s < 1, transform(b, 0) is the pose at s: each bone turns about its centre along the shorter arc
+  // while the centre moves on a straight line.
+  int run_up_steps() const { return run_up_steps_; }
+  double largest_start_rotation() const { return start_rotation_; }  // radians, of any bone from rest to load 0
+  void set_run_up(double s) { run_up_ = s; }
+  // Carries free owned nodes along by the bones' motion from run-up s0 to s1, as skin().
+  void skin_run_up(double s0, double s1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const;
   // A skeleton from a rig: the file (nullptr for other skeletons) and the world transforms of its
   // nodes at a load fraction (its clip, or a retargeted one), from which the plain linear-blend skin
   // of the file is written beside the simulated one; the retargeting's scale (0 without).
@@ -181,14 +235,28 @@ class Skeleton {
   // the clip sampled into rigid frames, the file's skinning weights per owned node.
   void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
   const RigClip* read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where);
+  // Each joint's segment at rest (from its origin a to b) and the region of lattice nodes it holds: a
+  // capsule of its radius about the segment, or (capped) a cylinder leaving 'gap' free at both ends.
   struct JointSegments {
     std::vector<int> joints;  // rig node indices
     std::vector<std::array<double, 3>> a, b;
+    std::vector<double> radius, gap;
+    std::vector<char> capped, candidate;  // candidate: may hold nodes (else why says why not)
+    std::vector<std::string> why;
+    std::vector<long long> dominated;
   };
-  static JointSegments joint_segments(const RigFile& rig, const std::vector<Affine>& rest);
-  static std::vector<std::vector<int>> capsule_nodes(const Mesh& mesh, const JointSegments& s, double radius);
+  static JointSegments capsule_segments(const RigFile& rig, const std::vector<Affine>& rest, double radius);
+  // The skin at rest: its vertices and their (rig node, weight) pairs.
+  struct RestSkin {
+    std::vector<std::array<double, 3>> x;
+    std::vector<std::vector<std::pair<int, double>>> w;
+  };
+  static RestSkin rest_skin(const RigFile& rig, const RigClip* rest_clip, double rest_time);
+  static JointSegments weighted_segments(const RigFile& rig, const std::vector<Affine>& rest, const RestSkin& skin, double h,
+                                         const SkeletonParameters& p, const std::string& where);
+  static std::vector<std::vector<int>> region_nodes(const Mesh& mesh, const JointSegments& s);
   std::vector<std::vector<Rigid>> sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate);
-  std::vector<std::vector<std::pair<int, double>>> skin_weights(const Mesh& mesh, const RigClip* rest_clip, double rest_time) const;
+  std::vector<std::vector<std::pair<int, double>>> skin_weights(const Mesh& mesh, const RestSkin& skin) const;
   struct Bone {
     std::string name;
     int parent = -1;
@@ -196,14 +264,23 @@ class Skeleton {
     std::vector<Rigid> frames;  // world transforms per frame (motion file), else empty
     std::vector<int> nodes;     // attached local nodes
     std::array<double, 3> seg_a{}, seg_b{};  // the bone's segment for the skinning weights
+    std::array<double, 3> centre{};          // of its nodes at rest: the run-up turns the bone about it
   };
   Rigid local(const Bone& b, double t) const;
+  Rigid posed(std::size_t b, double t) const;         // transform() without the run-up
+  Rigid run_up_pose(std::size_t b, double s) const;   // between rest (s = 0) and the pose at load 0
+  void skin_by(const std::vector<Rigid>& M, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const;
+  void plan_run_up(int steps);
   std::vector<Bone> bones_;
   bool skinning_ = true;
   double falloff_ = 4.0;
   int unused_joints_ = 0;
   std::vector<std::vector<std::pair<int, double>>> rig_weights_;  // per owned node, from the file's skin
   double nonrigid_ = 0.0;
+  std::vector<Joint> joints_;
+  std::string rig_path_;
+  double run_up_ = 1.0, start_rotation_ = 0.0, cell_ = 0.0;
+  int run_up_steps_ = 0;
   std::vector<std::vector<std::pair<int, double>>> weights_;  // per owned node: (bone, weight)
   std::shared_ptr<const RigFile> rig_, source_;  // source_: the file whose clip is retargeted
   std::unique_ptr<Retarget> retarget_;
@@ -223,9 +300,13 @@ void SkeletonParameters::check(const Context& c) const {
     if (retarget.empty())
       for (const char* retarget_only : {"Joint map", "Retarget scale"})
         if (c.given(retarget_only)) c.fail("'" + std::string(retarget_only) + "' applies with 'Retarget from' only");
+    if (bone_regions == BoneRegions::Capsules)
+      for (const char* weights_only : {"Bone thickness", "Joint gap"})
+        if (c.given(weights_only)) c.fail("'" + std::string(weights_only) + "' applies to 'Bone regions' skin weights only");
   } else {
     for (const char* rig_only : {"Clip", "Clip start", "Clip end", "Bone radius", "Clip samples per second", "Rig skinning weights",
-                                 "Rest time", "Retarget from", "Joint map", "Retarget scale"})
+                                 "Rest time", "Retarget from", "Joint map", "Retarget scale", "Bone regions", "Bone thickness",
+                                 "Joint gap", "Skip joints", "Include joints"})
       if (c.given(rig_only)) c.fail("'" + std::string(rig_only) + "' applies to a skeleton from a 'Rig' only");
   }
   std::map<std::string, std::string> parent_of;
