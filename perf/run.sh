@@ -1,17 +1,20 @@
 #!/usr/bin/env bash
 # Sinew's performance suite: one command, a JSON file, a Markdown table and PNG plots.
-#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--skin-caches] [--quick]
+#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--skin-caches] [--rigs] [--quick]
 # --large adds the paper's stretch at its resolution (58x58x116 cells, 969k DOFs, all 12 steps; about
 # 10 minutes); --character the paper-scale human (inputs/human.xml, 48k cells) with Stable Neo-Hookean
 # and with corotational, its whole crouch, and SNH with the preconditioner updated at every Newton
 # iteration (about 9 minutes); --skin-caches what writing the skin's glTF and PC2 caches costs on a
-# 4,902-vertex skin over 101 frames (sizes and seconds); --quick uses the smallest sizes only.
+# 4,902-vertex skin over 101 frames (sizes and seconds); --rigs the corpus of rigs nobody tuned (every
+# rigged, animated asset of assimp-testmodels as a new user writes the scene, quasi-static and with
+# inertia at 24 fps, to each clip's end: perf/rig_corpus.py; about an hour); --quick uses the smallest
+# sizes only (with --rigs: the first quarter of each clip).
 # Timings on a shared machine are noisy: the report gives the best of a few repetitions where it can.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/.." && pwd)
 out=$repo/results/perf
-large=0 quick=0 character=0 skin_caches=0
+large=0 quick=0 character=0 skin_caches=0 rigs=0
 build_args=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -19,6 +22,7 @@ while [ $# -gt 0 ]; do
     --large) large=1; shift ;;
     --character) character=1; shift ;;
     --skin-caches) skin_caches=1; shift ;;
+    --rigs) rigs=1; shift ;;
     --quick) quick=1; shift ;;
     --deps-cache|--build-dir) build_args+=("$1" "$2"); shift 2 ;;
     -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
@@ -175,6 +179,13 @@ XML
   log "skin caches: 4,902-vertex skin, 100 steps"
   omp 2 "$build/sinew" --output "$out/skin_cache_5k" "$out/scenes/skin_cache_5k.xml" > "$out/skin_cache_5k.log"
   grep -E "^skin caches|^done" "$out/skin_cache_5k.log" | tee "$out/skin_caches.txt"
+fi
+
+if [ $rigs -eq 1 ]; then
+  log "rig corpus (perf/rig_corpus.py): per clip, quasi-static and dynamic"
+  rig_args=(--sinew "$build/sinew" --out "$out/rigs")
+  [ $quick -eq 1 ] && rig_args+=(--quick)
+  omp 2 /usr/bin/python3 "$here/rig_corpus.py" "${rig_args[@]}" | tee "$out/rigs.txt"
 fi
 
 log "report"

@@ -1,0 +1,157 @@
+#!/usr/bin/env python3
+"""The rig corpus of issue 40: every rigged, animated asset of Debian's assimp-testmodels, run as a new
+user writes the scene (the file's bind pose as rest, default solver and bones, self contact on), to its
+clip's end, quasi-static (one load step per frame at 24 fps) and with inertia (backward Euler, 24 fps).
+
+    perf/rig_corpus.py --sinew build/sinew --out results/perf/rigs [--only NAME,...] [--modes M,...] [--quick] [--check]
+
+Prints one line per run (frames done, Newton and CG per frame, seconds per frame, inverted points,
+deepest penetration, volume change) and writes rigs.json and rigs.md in --out. --quick runs the
+first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
+frames with no inverted point at a quasi-static frame end, its deepest penetration below the contact
+thickness (0.05 cells) and its volume within 2% of the rest's."""
+import argparse, csv, json, os, subprocess, sys, time
+
+MODELS = "/usr/share/assimp/models"
+BCN = MODELS + "/X/BCN_Epileptic.X"
+MOCAP_MAP = ("Hips:B_Root_Pelvis_L, LeftUpLeg:B_Hip_Left, LeftLeg:B_Knee_Left, LeftFoot:B_Ankle_Left, "
+             "RightUpLeg:B_Hip_Right, RightLeg:B_Knee_Right, RightFoot:B_Ankle_Right, LowerBack:B_Spine1, Spine:B_Spine2, "
+             "Spine1:B_Spine4, Neck:B_Neck, LeftShoulder:B_Clavicle_Left, LeftArm:B_UpperArm_Left, "
+             "LeftForeArm:B_ForeArm_Left, LeftHand:B_Hand_Left, RightShoulder:B_Clavicle_Right, RightArm:B_UpperArm_Right, "
+             "RightForeArm:B_ForeArm_Right, RightHand:B_Hand_Right")
+
+# name, rig file, clip, seconds (start, end), cell size (about 1/60 of the skin's largest extent, rounded),
+# Skeleton extras. The cell size is the one entry a user must choose.
+CLIPS = [
+    ("huesitos", MODELS + "/FBX/huesitos.fbx", "", (0.0, 1.5625), 0.15, ""),
+    ("animation_with_skeleton", MODELS + "/FBX/animation_with_skeleton.fbx", "", (0.0, 0.8333), 0.6, ""),
+    ("bcn_epileptic", BCN, "", (0.0, 3.3), 0.03, ""),
+    ("wuson_run", MODELS + "/X/Testwuson.X", "Wuson_Run", (0.0, 0.9667), 0.05, ""),
+    ("wuson_walk", MODELS + "/X/Testwuson.X", "Wuson_Walk", (0.0, 3.6), 0.05, ""),
+    ("bcn_mocap_jump", BCN, "", (1.0, 3.0), 0.03,
+     '<Parameter name="Retarget from" type="string" value="%s/BVH/01_01.bvh"/>'
+     '<Parameter name="Joint map" type="string" value="%s"/>' % (MODELS, MOCAP_MAP)),
+]
+
+
+def scene(name, rig, clip, span, cell, extra, dynamic, frames, out):
+    start, end = span
+    skeleton = ('<Parameter name="Rig" type="string" value="%s"/>' % rig +
+                ('<Parameter name="Clip" type="string" value="%s"/>' % clip if clip else "") +
+                '<Parameter name="Clip start" type="double" value="%g"/><Parameter name="Clip end" type="double" value="%g"/>'
+                % (start, end) + extra)
+    time_or_steps = ('<ParameterList name="Time"><Parameter name="Integrator" type="string" value="backward-euler"/>'
+                     '<Parameter name="Frames" type="int" value="%d"/></ParameterList>' % frames if dynamic else
+                     '<ParameterList name="Loading"><Parameter name="Steps" type="int" value="%d"/></ParameterList>' % frames)
+    return f'''<ParameterList name="Sinew">
+  <Parameter name="Scene" type="string" value="{name}"/>
+  <ParameterList name="Mesh"><Parameter name="Type" type="string" value="rig"/>
+    <Parameter name="Rig" type="string" value="{rig}"/><Parameter name="Cell size" type="double" value="{cell}"/></ParameterList>
+  <ParameterList name="Material"><Parameter name="Model" type="string" value="stable-neohookean"/>
+    <Parameter name="Young modulus" type="double" value="2.0e4"/><Parameter name="Poisson ratio" type="double" value="0.45"/></ParameterList>
+  {time_or_steps}
+  <ParameterList name="Skeleton">{skeleton}</ParameterList>
+  <ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>
+  <ParameterList name="Output"><Parameter name="Directory" type="string" value="{out}"/>
+    <Parameter name="Checkpoint every" type="int" value="0"/><Parameter name="Skin glTF" type="bool" value="false"/><Parameter name="Skin PC2" type="bool" value="false"/><Parameter name="Surface OBJ" type="bool" value="false"/></ParameterList>
+</ParameterList>
+'''
+
+
+def summarize(log_csv, frames, substeps, rest_inverted):
+    rows = list(csv.DictReader(open(log_csv))) if os.path.exists(log_csv) else []
+    rows = [r for r in rows if int(r["step"]) > 0]
+    per = {}
+    for r in rows:  # frames: groups of substeps
+        f = (int(r["step"]) - 1) // substeps
+        d = per.setdefault(f, {"newton": 0, "cg": 0, "s": 0.0})
+        d["newton"] += int(r["newton_iterations"])
+        d["cg"] += int(r["cg_iterations"])
+        d["s"] += float(r["seconds_total"])
+    done = len(rows) // substeps
+    n = [per[f]["newton"] for f in sorted(per)][:done] or [0]
+    c = [per[f]["cg"] for f in sorted(per)][:done] or [0]
+    s = [per[f]["s"] for f in sorted(per)][:done] or [0.0]
+    ends = [rows[(f + 1) * substeps - 1] for f in range(done)]
+    return {
+        "frames": frames, "done": done,
+        "newton_avg": sum(n) / max(1, done), "newton_max": max(n),
+        "cg_avg": sum(c) / max(1, done), "seconds_avg": sum(s) / max(1, done),
+        "inverted_max": max([int(r["inverted_points"]) for r in ends] or [0]),
+        "min_J": min([float(r["min_J"]) for r in ends] or [1.0]),
+        "penetration_max": max([float(r.get("penetration") or 0.0) for r in ends] or [0.0]),
+        "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in ends] or [0.0]),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sinew", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--only", default="")
+    ap.add_argument("--modes", default="quasi-static,dynamic")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--timeout", type=float, default=1800.0)
+    ap.add_argument("--check", action="store_true")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    results = []
+    for name, rig, clip, span, cell, extra in CLIPS:
+        if a.only and name not in a.only.split(","):
+            continue
+        if not os.path.exists(rig):
+            print(f"{name}: {rig} is missing (apt-get install assimp-testmodels)", file=sys.stderr)
+            continue
+        if a.quick:
+            span = (span[0], span[0] + 0.25 * (span[1] - span[0]))
+        frames = max(1, round((span[1] - span[0]) * 24))
+        for mode in a.modes.split(","):
+            dynamic = mode == "dynamic"
+            out = os.path.join(a.out, f"{name}_{mode}")
+            xml = os.path.join(a.out, f"{name}_{mode}.xml")
+            open(xml, "w").write(scene(name, rig, clip, span, cell, extra, dynamic, frames, out))
+            t0 = time.time()
+            with open(os.path.join(a.out, f"{name}_{mode}.log"), "w") as log:
+                try:
+                    rc = subprocess.run([a.sinew, xml], stdout=log, stderr=subprocess.STDOUT, timeout=a.timeout).returncode
+                except subprocess.TimeoutExpired:
+                    rc = "timeout"
+            r = summarize(os.path.join(out, "log.csv"), frames, 1, 0)
+            r.update({"clip": name, "mode": mode, "exit": rc, "wall": time.time() - t0, "cell": cell})
+            text = open(os.path.join(a.out, f"{name}_{mode}.log")).read()
+            for line in text.splitlines():
+                if line.startswith("  mesh: "):
+                    r["mesh"] = line[8:]
+                if line.startswith("  skeleton: "):
+                    r["skeleton"] = line[12:]
+            results.append(r)
+            print(f"{name:24s} {mode:12s} exit {rc!s:7s} frames {r['done']}/{frames}  Newton/frame {r['newton_avg']:.1f} "
+                  f"(max {r['newton_max']})  CG/frame {r['cg_avg']:.0f}  s/frame {r['seconds_avg']:.2f}  inverted {r['inverted_max']}  "
+                  f"min J {r['min_J']:.3g}  penetration {r['penetration_max']:.3g}  volume {100 * r['volume_change_max']:.2f}%", flush=True)
+    json.dump(results, open(os.path.join(a.out, "rigs.json"), "w"), indent=1)
+    failed = []
+    for r in results if a.check else []:
+        what = f"{r['clip']} {r['mode']}"
+        if r["exit"] != 0 or r["done"] != r["frames"]:
+            failed.append(f"{what}: exit {r['exit']} after {r['done']} of {r['frames']} frames")
+        if r["mode"] == "quasi-static" and r["inverted_max"] > 0:
+            failed.append(f"{what}: {r['inverted_max']} inverted points at a frame end")
+        if not r["penetration_max"] < 0.05 * r["cell"]:
+            failed.append(f"{what}: penetration {r['penetration_max']:.3g} not below the thickness {0.05 * r['cell']:.3g}")
+        if not r["volume_change_max"] < 0.02:
+            failed.append(f"{what}: volume changed by {100 * r['volume_change_max']:.2f}%")
+    for f in failed:
+        print("FAILED: " + f, file=sys.stderr)
+    if failed:
+        sys.exit(1)
+    with open(os.path.join(a.out, "rigs.md"), "w") as md:
+        md.write("| clip | run | exit | frames | Newton/frame (max) | CG/frame | s/frame | inverted at frame ends | min J | deepest penetration | volume change |\n")
+        md.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
+        for r in results:
+            md.write(f"| {r['clip']} | {r['mode']} | {r['exit']} | {r['done']}/{r['frames']} | {r['newton_avg']:.1f} ({r['newton_max']}) | "
+                     f"{r['cg_avg']:.0f} | {r['seconds_avg']:.2f} | {r['inverted_max']} | {r['min_J']:.3g} | {r['penetration_max']:.3g} | "
+                     f"{100 * r['volume_change_max']:.2f}% |\n")
+
+
+if __name__ == "__main__":
+    main()
