@@ -58,29 +58,22 @@ def scene(name, rig, clip, span, cell, extra, dynamic, frames, out):
 '''
 
 
-def summarize(log_csv, frames, substeps, rest_inverted):
+def summarize(log_csv, frames):
+    # One log row per frame: a quasi-static load step, or a time step at the default one substep.
     rows = list(csv.DictReader(open(log_csv))) if os.path.exists(log_csv) else []
     rows = [r for r in rows if int(r["step"]) > 0]
-    per = {}
-    for r in rows:  # frames: groups of substeps
-        f = (int(r["step"]) - 1) // substeps
-        d = per.setdefault(f, {"newton": 0, "cg": 0, "s": 0.0})
-        d["newton"] += int(r["newton_iterations"])
-        d["cg"] += int(r["cg_iterations"])
-        d["s"] += float(r["seconds_total"])
-    done = len(rows) // substeps
-    n = [per[f]["newton"] for f in sorted(per)][:done] or [0]
-    c = [per[f]["cg"] for f in sorted(per)][:done] or [0]
-    s = [per[f]["s"] for f in sorted(per)][:done] or [0.0]
-    ends = [rows[(f + 1) * substeps - 1] for f in range(done)]
+    done = len(rows)
+    n = [int(r["newton_iterations"]) for r in rows] or [0]
+    c = [int(r["cg_iterations"]) for r in rows] or [0]
+    s = [float(r["seconds_total"]) for r in rows] or [0.0]
     return {
         "frames": frames, "done": done,
         "newton_avg": sum(n) / max(1, done), "newton_max": max(n),
         "cg_avg": sum(c) / max(1, done), "seconds_avg": sum(s) / max(1, done),
-        "inverted_max": max([int(r["inverted_points"]) for r in ends] or [0]),
-        "min_J": min([float(r["min_J"]) for r in ends] or [1.0]),
-        "penetration_max": max([float(r.get("penetration") or 0.0) for r in ends] or [0.0]),
-        "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in ends] or [0.0]),
+        "inverted_max": max([int(r["inverted_points"]) for r in rows] or [0]),
+        "min_J": min([float(r["min_J"]) for r in rows] or [1.0]),
+        "penetration_max": max([float(r.get("penetration") or 0.0) for r in rows] or [0.0]),
+        "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in rows] or [0.0]),
     }
 
 
@@ -116,7 +109,7 @@ def main():
                     rc = subprocess.run([a.sinew, xml], stdout=log, stderr=subprocess.STDOUT, timeout=a.timeout).returncode
                 except subprocess.TimeoutExpired:
                     rc = "timeout"
-            r = summarize(os.path.join(out, "log.csv"), frames, 1, 0)
+            r = summarize(os.path.join(out, "log.csv"), frames)
             r.update({"clip": name, "mode": mode, "exit": rc, "wall": time.time() - t0, "cell": cell})
             text = open(os.path.join(a.out, f"{name}_{mode}.log")).read()
             for line in text.splitlines():

@@ -188,4 +188,15 @@ Teuchos::RCP<Teuchos::ParameterList> read_parameter_text(const std::string& text
   return convert(text, name);
 }
 
+std::vector<std::string> comma_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    item.erase(0, item.find_first_not_of(" \t\n"));
+    item.erase(item.find_last_not_of(" \t\n") + 1);
+    if (!item.empty()) items.push_back(std::move(item));
+  }
+  return items;
+}
+
 }  // namespace sinew

@@ -2,6 +2,7 @@
 // that includes Assimp's headers.
 #include <sinew/core/errors.hpp>
 #include <sinew/core/rigid.hpp>
+#include <sinew/core/xml_input.hpp>
 #include <sinew/discretization/rig_file.hpp>
 
 #include <assimp/Importer.hpp>
@@ -366,18 +367,16 @@ TriangleSurface rig_surface(const RigFile& rig, const std::string& meshes, const
 
 std::vector<std::pair<std::string, std::string>> Retarget::parse_map(const std::string& text) {
   std::vector<std::pair<std::string, std::string>> map;
-  std::stringstream list(text);
   auto trim = [](std::string v) {
     v.erase(0, v.find_first_not_of(" \t\n"));
     v.erase(v.find_last_not_of(" \t\n") + 1);
     return v;
   };
-  for (std::string pair; std::getline(list, pair, ',');) {
-    if (trim(pair).empty()) continue;
+  for (const std::string& pair : comma_list(text)) {
     const auto colon = pair.find(':');
     const std::string from = trim(pair.substr(0, colon)), to = colon == std::string::npos ? "" : trim(pair.substr(colon + 1));
     if (colon == std::string::npos || from.empty() || to.empty() || to.find(':') != std::string::npos)
-      throw InputError("'Joint map': '" + trim(pair) + "' is not 'source joint:rig joint'");
+      throw InputError("'Joint map': '" + pair + "' is not 'source joint:rig joint'");
     map.emplace_back(from, to);
   }
   return map;

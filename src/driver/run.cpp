@@ -216,15 +216,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
       std::fflush(stdout);
     }
     residuals.clear();
-    auto progress = [&](const NewtonIterate& it) {
-      residuals.push_back(it.residual);
-      out_->log_newton(k, t, it);
-      if (!talk_) return;
-      std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations,
-                  it.step, it.exact_hessian ? "  (exact Hessian)" : "");
-      std::fflush(stdout);
-    };
-    const SolveReport r = solve(*trial, progress, rec);
+    const SolveReport r = solve(*trial, newton_progress(k, t, residuals), rec);
     rec.solve.accumulate(predicted);
     rec.solve.accumulate(r);
     if (rec.solve.initial_residual == 0.0) rec.solve.initial_residual = r.initial_residual;
@@ -268,6 +260,17 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
   return StepOutcome::Done;
 }
 
+std::function<void(const NewtonIterate&)> Simulation::newton_progress(int step, double t, std::vector<double>& residuals) {
+  return [this, step, t, &residuals](const NewtonIterate& it) {
+    residuals.push_back(it.residual);
+    out_->log_newton(step, t, it);
+    if (!talk_) return;
+    std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations, it.step,
+                it.exact_hessian ? "  (exact Hessian)" : "");
+    std::fflush(stdout);
+  };
+}
+
 Simulation::StepOutcome Simulation::run_up() {
   // Quasi-static steps (no inertia: a dynamic run's time has not started) that carry the bones from the
   // rest pose to their pose at load 0, cut in half on failure; the state reached is the run's start.
@@ -290,16 +293,8 @@ Simulation::StepOutcome Simulation::run_up() {
       std::fflush(stdout);
     }
     residuals.clear();
-    auto progress = [&](const NewtonIterate& it) {
-      residuals.push_back(it.residual);
-      out_->log_newton(0, 0.0, it);
-      if (!talk_) return;
-      std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s\n", it.iteration, it.residual, it.linear_iterations, it.step,
-                  it.exact_hessian ? "  (exact Hessian)" : "");
-      std::fflush(stdout);
-    };
     StepRecord rec;
-    const SolveReport r = solve(*trial, progress, rec);
+    const SolveReport r = solve(*trial, newton_progress(0, 0.0, residuals), rec);
     if (r.converged()) {
       scene.system().end_step(*trial);
       u_->assign(*trial);

@@ -228,17 +228,6 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
 
 namespace {
 
-std::vector<std::string> comma_names(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  for (std::string item; std::getline(ss, item, ',');) {
-    item.erase(0, item.find_first_not_of(" \t\n"));
-    item.erase(item.find_last_not_of(" \t\n") + 1);
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
 double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
@@ -304,7 +293,7 @@ Skeleton::JointSegments Skeleton::weighted_segments(const RigFile& rig, const st
   // The user's lists, each name a joint of the file.
   auto listed = [&](const std::string& text, const char* entry) {
     std::vector<char> in(N, 0);
-    for (const std::string& name : comma_names(text)) {
+    for (const std::string& name : comma_list(text)) {
       const int n = rig.node_index(name);
       if (n < 0 || !rig.nodes[n].joint) {
         std::vector<std::string> names;

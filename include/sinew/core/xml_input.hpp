@@ -7,6 +7,7 @@
 #include <Teuchos_RCP.hpp>
 
 #include <string>
+#include <vector>
 
 namespace Teuchos {
 class ParameterList;
@@ -23,5 +24,9 @@ Teuchos::RCP<Teuchos::ParameterList> read_parameter_text(const std::string& text
 // A plain decimal number as a person writes it: optional sign, digits, optional fraction and exponent;
 // no "nan", "inf", hexadecimal or trailing characters. For doubles the value must also be finite.
 bool strict_number(const std::string& text, bool integer);
+
+// The items of a comma-separated string entry ('Joint map', 'Skip joints'), each trimmed of blanks
+// and newlines; empty items are dropped.
+std::vector<std::string> comma_list(const std::string& text);
 
 }  // namespace sinew

@@ -56,6 +56,9 @@ class Simulation {
   StepOutcome advance(int k, StepRecord& rec);
   // The bones' run-up from the rest pose to load 0 before step 1 (Scene::run_up_steps).
   StepOutcome run_up();
+  // A solve's progress callback: each Newton iterate's residual into `residuals`, its newton.csv row
+  // (for step, at load t) and its progress line.
+  std::function<void(const NewtonIterate&)> newton_progress(int step, double t, std::vector<double>& residuals);
   // Solves for the step's state from trial (its prescribed values set): rounds of the terms (System::round: contact's detection
   // and tractions) and solves until no term asks for another.
   SolveReport solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
