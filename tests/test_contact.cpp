@@ -1,5 +1,6 @@
 // Contact (algebra/terms/contact.hpp): the penalty energy's gradient and Hessian against finite
-// differences, its Hessian PSD (LAPACK), colliders' signed distances against closed forms, two blocks
+// differences (sharp and smooth onset), the smooth onset's law, node relaxation away from the springs,
+// its Hessian PSD (LAPACK), colliders' signed distances against closed forms, two blocks
 // pressed together in equilibrium, a half-space and a mesh collider pushing back alike, a slab folded
 // onto itself by bones that does not cross itself (and does without contact), 1 thread = 2 threads =
 // 2 ranks.
@@ -7,6 +8,7 @@
 #include "system_test_utils.hpp"
 
 #include <sinew/algebra/terms/contact.hpp>
+#include <sinew/core/collective.hpp>
 #include <sinew/core/parameters.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 #include <sinew/driver/run.hpp>
@@ -67,11 +69,16 @@ void press(const System& sys, Vector& u, double push) {
 // differences of the force see the same Hessian) along random directions, with samples both inside
 // the other block and near it; the pairs cross ranks on 2 ranks.
 TEST(Contact, SpringsHaveTheGradientAndHessianOfTheirEnergy) {
+  // With a sharp onset and with a smooth one as wide as the thickness (both sides of it in use: the
+  // samples lie from the margin down to deep inside).
+  for (double onset : {0.0, 0.02}) {
+  SCOPED_TRACE("onset " + std::to_string(onset));
   System sys(world(), two_blocks(), snh());
   ContactSettings cs;
   cs.stiffness = 2e4;
   cs.thickness = 0.02;
   cs.margin = 0.2;
+  cs.onset = onset;
   auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
   sys.add_term(contact);
   auto u = sys.create_vector();
@@ -113,6 +120,88 @@ TEST(Contact, SpringsHaveTheGradientAndHessianOfTheirEnergy) {
     scale = std::max(scale, std::fabs(fc[k]));
   }
   for (double s : sum) EXPECT_LT(std::fabs(s), 1e-12 * fc.size() * scale);
+  }
+}
+
+// The smooth onset's law (contact_spring_law): zero off contact, value, slope and curvature continuous
+// at 0 and at the onset's end (C2), its derivatives those of its value (central differences), and
+// the plain k/2 s^2 from eps = 0 and beyond the onset up to a constant shift of the slope.
+TEST(Contact, ASmoothOnsetIsTwiceDifferentiableAndBecomesThePlainPenalty) {
+  const double eps = 0.3;
+  auto law = [&](double s) { return contact_spring_law(s, eps); };
+  for (double s : {-1.0, -1e-9, 0.0}) {
+    EXPECT_EQ(law(s).e, 0.0);
+    EXPECT_EQ(law(s).d1, 0.0);
+    EXPECT_EQ(law(s).d2, 0.0);
+  }
+  for (double at : {0.0, eps}) {  // the joints: both sides agree to the step's order
+    const double h = 1e-9;
+    const auto a = law(at - h), b = law(at + h);
+    EXPECT_NEAR(a.e, b.e, 1e-9) << at;  // the slope times 2h at most
+    EXPECT_NEAR(a.d1, b.d1, 1e-8) << at;
+    EXPECT_NEAR(a.d2, b.d2, 1e-7) << at;
+  }
+  for (double s : {0.01, 0.1, 0.29, 0.31, 0.7, 3.0}) {
+    const double h = 1e-6;
+    EXPECT_NEAR((law(s + h).e - law(s - h).e) / (2 * h), law(s).d1, 1e-8) << s;
+    EXPECT_NEAR((law(s + h).d1 - law(s - h).d1) / (2 * h), law(s).d2, 1e-8) << s;
+    EXPECT_GE(law(s).d2, 0.0);
+    EXPECT_LE(law(s).d2, 1.0);
+    const auto sharp = contact_spring_law(s, 0.0);
+    EXPECT_DOUBLE_EQ(sharp.e, 0.5 * s * s);
+    EXPECT_DOUBLE_EQ(sharp.d1, s);
+    EXPECT_DOUBLE_EQ(sharp.d2, 1.0);
+    if (s > eps) EXPECT_NEAR(law(s).d1, s - 0.5 * eps, 1e-15) << s;
+    else EXPECT_NEAR(law(s).d2, s / eps, 1e-15) << s;
+  }
+}
+
+// Node relaxation with contact on moves no node of a spring (its energy is not linear there) and
+// relaxes others: the pressed blocks' springs keep their nodes exactly, some other node moves, the
+// total energy falls. Without the contact term the same call moves spring nodes too (the test can fail).
+TEST(Contact, NodeRelaxationLeavesTheSpringsNodesWhereTheyAre) {
+  for (bool with_contact : {true, false}) {
+    SCOPED_TRACE(with_contact ? "contact" : "no contact");
+    System sys(world(), two_blocks(), snh());
+    ContactSettings cs;
+    cs.stiffness = 2e4;
+    cs.thickness = 0.02;
+    cs.margin = 0.2;
+    cs.onset = 0.02;
+    auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
+    if (with_contact) sys.add_term(contact);
+    auto u = sys.create_vector();
+    press(sys, *u, 0.13);
+    contact->detect(*u);
+    if (with_contact) sys.update_pattern();
+    // Every rank's spring nodes (global ids), gathered.
+    std::vector<long long> mine;
+    for (const auto& p : contact->pairs())
+      for (auto g : p.node) mine.push_back(static_cast<long long>(g));
+    const std::vector<long long> spring_nodes = allgatherv(raw_comm(*world()), mine);
+    ASSERT_FALSE(spring_nodes.empty());
+    auto f = sys.create_vector();
+    const double E0 = sys.evaluate(*u, f.get(), nullptr).energy;
+    const auto before = gather(*u);
+    NodeRelaxationSettings settings;
+    const NodeRelaxationTotals t = sys.relax_nodes(*u, *f, 1e-4, 1, settings);
+    EXPECT_GT(t.nodes, 0);
+    const auto after = gather(*u);
+    int spring_moved = 0, other_moved = 0;
+    std::vector<char> is_spring(before.size() / 3, 0);
+    for (long long g : spring_nodes) is_spring[static_cast<std::size_t>(g)] = 1;
+    for (std::size_t n = 0; n < is_spring.size(); ++n) {
+      const bool moved = after[3 * n] != before[3 * n] || after[3 * n + 1] != before[3 * n + 1] || after[3 * n + 2] != before[3 * n + 2];
+      (is_spring[n] ? spring_moved : other_moved) += moved;
+    }
+    EXPECT_GT(other_moved, 0);
+    if (with_contact) {
+      EXPECT_EQ(spring_moved, 0);
+      EXPECT_LT(sys.evaluate(*u, nullptr, nullptr).energy, E0);
+    } else {
+      EXPECT_GT(spring_moved, 0);
+    }
+  }
 }
 
 // Signed distances and their gradients against closed forms: outside and inside, near edges and

@@ -449,17 +449,21 @@ void System::element_fields(const Vector& u, std::vector<double>& psi, std::vect
 NodeRelaxationTotals System::relax_nodes(Vector& u, const Vector& force, double share, int rings,
                                          const NodeRelaxationSettings& settings) const {
   NodeRelaxationTotals done;
-  // Contact and inertia are not linear in a node's displacement: their share of the gradient cannot be
-  // frozen. The external-force term's can (it is linear). Each term says which it is.
-  const bool allowed = std::all_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->allows_node_relaxation(); });
+  // Inertia is not linear in a node's displacement, nor is contact at its springs' nodes: their share of
+  // the gradient cannot be frozen there. The external-force term's can (it is linear). Each term says
+  // which it is, and which nodes it holds.
+  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
+  std::vector<char> held(n_local, 0);
+  const bool allowed = std::all_of(terms_.begin(), terms_.end(), [&](const auto& t) { return t->allows_node_relaxation(held); });
   if (!allowed || !(share > 0.0) || !Kokkos::SpaceAccessibility<Kokkos::HostSpace, DeviceMemory>::accessible)
     return done;
   const double f2 = force.norm2() * force.norm2();
   if (!(f2 > 0.0) || !std::isfinite(f2)) return done;
-  const std::size_t n_owned = mesh_.n_owned_nodes, n_local = mesh_.local_nodes();
   auto f = force.getLocalViewHost(Tpetra::Access::ReadOnly);
   auto fixed = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), fixed_);
-  auto free_node = [&](std::size_t n) { return n < n_owned && !fixed(3 * n) && !fixed(3 * n + 1) && !fixed(3 * n + 2); };
+  auto free_node = [&](std::size_t n) {
+    return n < n_owned && !held[n] && !fixed(3 * n) && !fixed(3 * n + 1) && !fixed(3 * n + 2);
+  };
   auto force2 = [&](std::size_t n) { return f(3 * n, 0) * f(3 * n, 0) + f(3 * n + 1, 0) * f(3 * n + 1, 0) + f(3 * n + 2, 0) * f(3 * n + 2, 0); };
   std::vector<int> nodes;
   std::vector<char> picked(n_local, 0);

@@ -328,6 +328,7 @@ SolveReport Simulation::solve(Vector& trial, const std::function<void(const Newt
                               StepRecord& rec) {
   System& sys = scene_->system();
   SolveReport sum;
+  double first_residual = 0.0;
   // Round 0 sets the terms up at the first guess (contact pairs); after each converged solve the terms
   // look at its state again, and the step ends when none asks for another solve.
   for (int round = 0;; ++round) {
@@ -341,7 +342,10 @@ SolveReport Simulation::solve(Vector& trial, const std::function<void(const Newt
       std::fflush(stdout);
     }
     if (round > 0 && !terms.again) break;  // round 0 always solves
-    SolveReport r = solver_->solve(trial, progress);
+    // A later round's solve starts near equilibrium: its exact Hessian is due relative to the step's
+    // first residual (NonlinearSolver::solve).
+    SolveReport r = solver_->solve(trial, progress, first_residual);
+    if (round == 0) first_residual = r.initial_residual;
     if (round > 0) r.accumulate(sum);
     sum = r;
     if (!r.converged()) break;

@@ -65,6 +65,7 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
     throw InputError("Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" + format_number(cs.thickness) + ")");
   cs.refine = p.refine;
   cs.rounds = p.rounds;
+  cs.onset = p.smooth ? cs.thickness : 0.0;
   auto term = std::make_shared<ContactTerm>(system, cs, colliders->shapes());
   term->set_pose_source([colliders](std::size_t k, double t) { return colliders->pose(k, t); });
   return term;

@@ -455,7 +455,10 @@ class ProgressObserver : public NOX::Observer {
   void runPostIterate(const NOX::Solver::Generic& solver) override {
     NewtonIterate it;
     it.iteration = solver.getNumIterations();
-    it.residual = solver.getSolutionGroup().getNormF();
+    // A failed More'-Thuente search leaves the solution group without F (its getNormF throws): report
+    // the residual the iteration started from.
+    const auto& g = solver.getSolutionGroup();
+    it.residual = g.isF() ? g.getNormF() : solver.getPreviousSolutionGroup().getNormF();
     if (auto ls = dynamic_cast<const NOX::Solver::LineSearchBased*>(&solver)) it.step = ls->getStepSize();
     if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step, it.residual);
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
@@ -733,18 +736,18 @@ NonlinearSolver::~NonlinearSolver() = default;
 double NonlinearSolver::absolute_tolerance() const { return impl_->params.absolute_tolerance; }
 void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->interrupt = std::move(interrupt); }
 
-SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress) {
+SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress, double reference) {
   const Vector start(u, Teuchos::Copy);
   using Inverted = SolverParameters::Inverted;
   const Inverted inv = impl_->params.inverted;
   const auto inverted = inv == Inverted::Exact      ? HessianPolicy::Inverted::Exact
                         : inv == Inverted::PerPoint ? HessianPolicy::Inverted::PerPoint
                                                     : HessianPolicy::Inverted::WholeMesh;
-  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted));
+  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted), reference);
   if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used) {
     // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
     u.assign(start);
-    SolveReport second = solve_once(u, progress, HessianPolicy(0.0));
+    SolveReport second = solve_once(u, progress, HessianPolicy(0.0), 0.0);
     second.accumulate(report);
     report = second;
   }
@@ -753,7 +756,7 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
 }
 
 SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress,
-                                        HessianPolicy policy) {
+                                        HessianPolicy policy, double reference) {
   SolveReport report;
   report.max_iterations = impl_->params.max_iterations;
   Impl& m = *impl_;
@@ -789,7 +792,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     auto group = m.group;
     group->computeF();
     report.initial_residual = group->getNormF();
-    state.policy.start(report.initial_residual);
+    state.policy.start(reference > 0.0 ? std::max(reference, report.initial_residual) : report.initial_residual);
     auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
     auto converged = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     // Unscaled: the plain L2 norm of the force residual, as the paper's criterion (NOX scales by
@@ -832,9 +835,19 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
       report.status = SolveStatus::LineSearchFailed;
   } catch (const ProgressObserver::Interrupted&) {
     report.status = SolveStatus::Interrupted;
-  } catch (const std::exception& e) {
+  } catch (...) {
+    // NOX throws plain strings ("NOX Error") besides std::exception; either ends the solve with the
+    // message, never the program.
     report.status = SolveStatus::SolverError;
-    report.detail = e.what();
+    try {
+      throw;
+    } catch (const std::exception& e) {
+      report.detail = e.what();
+    } catch (const char* e) {
+      report.detail = std::string("NOX: ") + e;
+    } catch (...) {
+      report.detail = "an unknown exception inside the nonlinear solver";
+    }
     if (report.detail.size() > 600) report.detail = report.detail.substr(0, 600) + "...";
     // The other ranks must have met it too (a collective failure), or they wait in a call this rank
     // left: then the job ends with the message rather than hanging.

@@ -150,8 +150,13 @@ class EnergyTerm {
   virtual void load_state(const TermState& state) { (void)state; }
 
   // Node relaxation (System::relax_nodes) moves a node with the other terms' share of its gradient
-  // frozen: only a term linear in u (or with no share at any node) may allow it.
-  virtual bool allows_node_relaxation() const { return false; }
+  // frozen: a term linear in u allows it everywhere (returns true); a term whose energy is nonlinear in
+  // some nodes only (contact: the nodes of its springs) allows it elsewhere, marking those nodes in
+  // `held` (per local node, 1: not moved); false forbids it everywhere (inertia).
+  virtual bool allows_node_relaxation(std::vector<char>& held) const {
+    (void)held;
+    return false;
+  }
   // The tangent predictor linearises the total energy about the last state: a term set up at a state
   // (contact pairs found there) cannot be carried to a new one that way.
   virtual bool linearisable() const { return true; }

@@ -159,8 +159,8 @@ class System {
   // three components whose force holds at least `share` of |force|^2 (and up to `rings` element rings of
   // free owned nodes around them) are relaxed one by one, the rest held; u (owned DOFs) is updated.
   // Only when every term allows it (EnergyTerm::allows_node_relaxation: the elastic and external-force
-  // terms; the others are not linear in a node's displacement, and are left to Newton): returns zero
-  // totals otherwise. Collective; the
+  // terms everywhere, contact away from its springs' nodes; inertia is not linear in a node's
+  // displacement, and is left to Newton): returns zero totals otherwise. Collective; the
   // caller checks the new state's energy (nodes moved at once on two ranks may share an element).
   NodeRelaxationTotals relax_nodes(Vector& u, const Vector& force, double share, int rings,
                                    const NodeRelaxationSettings& settings) const;

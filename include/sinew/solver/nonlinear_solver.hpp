@@ -78,8 +78,9 @@ struct SolverParameters {
             "nodes whose force holds at least this share of |F|^2, and their neighbours, are moved one at a "
             "time to lower the energy of their elements, the rest held (a nonlinear Gauss-Seidel pass; kept "
             "when the total energy falls): the few nodes that hold a residual near a crease no longer cut "
-            "every Newton step. Not with contact or inertia, not next to an inverted point, never inverting "
-            "one, and not while more than 0.1% of the points are inverted (0: off)",
+            "every Newton step. Not with inertia, not at the nodes of contact springs (nor on the surface "
+            "with colliders), not next to an inverted point, never inverting one, and not while more than "
+            "0.1% of the points are inverted (0: off)",
             Range::closed_open(0.0, 1.0));
     v.choice("Line search merit", merit, Merit::Energy, Choices<Merit>{{"energy", Merit::Energy}, {"residual", Merit::Residual}},
              "what the line search decreases: the total energy, or 0.5 |F|^2");
@@ -164,7 +165,11 @@ class NonlinearSolver {
   // Solves force(u) = 0 starting from u (its Dirichlet entries hold the prescribed values, which stay).
   // Never throws for a failed solve: linear-solver breakdowns, line-search failures and non-finite
   // values are reported in the SolveReport's status.
-  SolveReport solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress = {});
+  // `reference`: the residual 'Exact Hessian below' is relative to (0: this solve's first). A later
+  // solve of the same load step (another contact round) passes the step's first: it starts near
+  // equilibrium, where the exact Hessian is due at once, and would otherwise wait for its own residual
+  // to fall a hundredfold under projection, which converges linearly.
+  SolveReport solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress = {}, double reference = 0.0);
 
   // The tangent predictor of a load step: from the equilibrium u0 (of the last load), the linearised
   // response to trial (the step's guess: the new prescribed values, free nodes where a rig's skinning
@@ -183,7 +188,8 @@ class NonlinearSolver {
   void set_interrupt(std::function<bool()> interrupt);
 
  private:
-  SolveReport solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress, HessianPolicy policy);
+  SolveReport solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress, HessianPolicy policy,
+                         double reference);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -23,6 +23,13 @@
 // For a frozen n, beta and lambda, E is a convex function of the twelve coordinates: its Hessian
 // k A (w (x) n)(w (x) n)^T, w = (1, -beta), is PSD and exact.
 //
+// Smooth onset of the self-contact springs (ContactSettings::onset = eps > 0; 'Smooth onset' sets the
+// thickness, off by default): k A phi(s) replaces k A/2 max(0, s)^2, s = lambda / k + delta - g, with phi'' ramping
+// linearly from 0 to 1 over [0, eps] and 1 after (contact_spring_law below): the energy is C2 and the
+// Hessian k A phi''(s) (w (x) n)(w (x) n)^T still PSD and exact, so a spring that engages or lets go
+// inside a Newton step no longer makes the model wrong by its whole stiffness. A smooth spring rests
+// inside its onset, so its traction is raised only for a sample deeper than clearance - eps - delta/10.
+//
 // Colliders (kinematic: a half-space, a sphere, a capsule, an infinite cylinder, or a closed triangle
 // mesh, each at a pose set per step) act on every sample with the same energy in g = phi(x_s), phi the
 // signed distance (positive outside), and a multiplier per sample and collider; the Hessian
@@ -77,6 +84,22 @@ struct ColliderShape {
   std::vector<std::array<geom::Vec, 3>> edge_normal_;  // per triangle, its edges (0-1, 1-2, 2-0)
 };
 
+// The spring's energy per k A as a function of its stretch s, and its first two derivatives: a cubic
+// onset over [0, eps], where the stiffness ramps linearly from 0 to 1, then the quadratic with the same
+// value, slope and curvature at eps (C2; eps = 0 gives the plain max(0, s)^2 / 2). With a sharp onset
+// the Hessian jumps from nothing to k A n n^T as a spring engages, and Newton's model is wrong on one
+// side of every spring that is about to touch or let go: BCN's knee crease went round a cycle of step
+// lengths 2 and 1/8 for 50 iterations (docs/performance.md). Public for tests.
+struct ContactSpringLaw {
+  double e, d1, d2;
+};
+inline ContactSpringLaw contact_spring_law(double s, double eps) {
+  if (s <= 0.0) return {0.0, 0.0, 0.0};
+  if (s < eps) return {s * s * s / (6.0 * eps), 0.5 * s * s / eps, s / eps};
+  return {0.5 * s * s - 0.5 * eps * s + eps * eps / 6.0, s - 0.5 * eps, 1.0};
+}
+
+
 struct ContactSettings {
   bool self = true;
   double stiffness = 0.0;  // k: traction per unit of penetration (> 0)
@@ -84,6 +107,7 @@ struct ContactSettings {
   double margin = 0.0;     // proximity pairing distance (> thickness)
   bool refine = true;      // walk targets to the closest deformed-surface point
   int rounds = 10;         // at most this many detect-and-solve rounds per step (round())
+  double onset = 0.0;      // the stretch over which a spring's stiffness ramps from 0 to k (0: sharp)
 };
 
 // What one detection pass found (global counts).
@@ -122,6 +146,8 @@ class ContactTerm final : public EnergyTerm {
   void save_state(TermState& state) const override;
   void load_state(const TermState& state) override;
   bool linearisable() const override { return false; }
+  // Away from the springs' nodes (and, with colliders, the surface): the energy does not depend on them.
+  bool allows_node_relaxation(std::vector<char>& held) const override;
   std::vector<std::string> log_columns() const override;
   std::vector<double> log_values(const EvaluationTotals& totals) const override;
   std::vector<std::string> summary(const EvaluationTotals& totals) const override;

@@ -25,7 +25,7 @@ class ElasticTerm final : public EnergyTerm {
   const char* name() const override { return "elastic"; }
   void add(const TermInput& in, TermOutput& out) const override;
   // Node relaxation is this term's own local solve (relax below).
-  bool allows_node_relaxation() const override { return true; }
+  bool allows_node_relaxation(std::vector<char>&) const override { return true; }
 
   // The law of elements in no region (blocks_[0], possibly with no elements).
   const MaterialSpec& default_law() const { return blocks_.front().law; }

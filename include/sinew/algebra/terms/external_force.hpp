@@ -20,7 +20,7 @@ class ExternalForceTerm final : public EnergyTerm {
   const char* name() const override { return "external"; }
   void add(const TermInput& in, TermOutput& out) const override;
   // Linear in u: node relaxation may freeze its share of a node's gradient.
-  bool allows_node_relaxation() const override { return true; }
+  bool allows_node_relaxation(std::vector<char>&) const override { return true; }
   // The loads at load fraction t: t times the full ones when ramped (quasi-static), else in full.
   void set_load(double t) override;
 

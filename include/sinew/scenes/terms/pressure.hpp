@@ -88,7 +88,7 @@ class PressureTerm final : public EnergyTerm {
     out.energy += energy;
   }
   void set_load(double t) override { scale_ = ramped_ ? t : 1.0; }
-  bool allows_node_relaxation() const override { return true; }
+  bool allows_node_relaxation(std::vector<char>&) const override { return true; }
   // The resultant force applied now (its magnitude).
   std::vector<std::string> log_columns() const override { return {"pressure_force"}; }
   std::vector<double> log_values(const EvaluationTotals&) const override {
