@@ -72,7 +72,9 @@ def summarize(log_csv, frames):
         "cg_avg": sum(c) / max(1, done), "seconds_avg": sum(s) / max(1, done),
         "inverted_max": max([int(r["inverted_points"]) for r in rows] or [0]),
         "min_J": min([float(r["min_J"]) for r in rows] or [1.0]),
-        "penetration_max": max([float(r.get("penetration") or 0.0) for r in rows] or [0.0]),
+        # A spring's sample behind its target, or a surface point found inside the body by the step's
+        # last detection with no spring pushing it out yet (inside_depth): both are penetration.
+        "penetration_max": max([max(float(r.get("penetration") or 0.0), float(r.get("inside_depth") or 0.0)) for r in rows] or [0.0]),
         "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in rows] or [0.0]),
     }
 

@@ -560,10 +560,29 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     }
     closest_on_triangle(Xref, surface_.X[T[t][0]], surface_.X[T[t][1]], surface_.X[T[t][2]], w);
     double d2 = distance2(x[v], w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]);
-    const int refined = settings_.refine ? refine_target(x, static_cast<int>(v), t, w, d2) : 0;
     // The spring's direction: from the sample out to the target point (the gradient of the distance,
     // also right where the target lies on an edge or a corner), or the target's normal when the two
     // points coincide or disagree about which side is out.
+    auto behind = [&](int tri, const double ww[3]) {  // the sample lies behind the target's face
+      const Vec face = triangle_normal(x[T[tri][0]], x[T[tri][1]], x[T[tri][2]]);
+      return dot((ww[0] * x[T[tri][0]] + ww[1] * x[T[tri][1]] + ww[2] * x[T[tri][2]]) - x[v], face) > 0.0;
+    };
+    int refined = 0;
+    if (settings_.refine) {
+      // A refined target in front of which the sample lies (the walk went round a tangled fold, where
+      // a sample can be in an element yet outside the nearest face) would hold no spring: its pair
+      // never pushed a sample 0.16 deep on the FBX bar. Keep the mapped target then.
+      int t2 = t;
+      double w2[3] = {w[0], w[1], w[2]}, d22 = d2;
+      refined = refine_target(x, static_cast<int>(v), t2, w2, d22);
+      if (refined && (behind(t2, w2) || !behind(t, w))) {
+        t = t2;
+        std::copy(w2, w2 + 3, w);
+        d2 = d22;
+      } else {
+        refined = 0;
+      }
+    }
     const Vec face = triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]]);
     const Vec d = (w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]) - x[v];
     const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;

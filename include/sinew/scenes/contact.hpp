@@ -95,8 +95,8 @@ struct ContactParameters {
             "self contact: a spring's stiffness ramps from 0 to 'Stiffness' over its first 'Thickness' of "
             "compression (a C2 energy: Newton's model stays right where springs engage or let go in a crease; "
             "arm_contact.xml 217 -> 192 Newton iterations) instead of the plain k/2 max(0, s)^2 onset. Off by "
-            "default: on the FBX bar's dynamic clip a sample stuck inside stayed there (0.16 deep, thickness "
-            "0.03) where the plain onset pushed it out (docs/performance.md)");
+            "default: huesitos' curl then ended with springs 0.051 deep (thickness 0.0075; 0.011 without) "
+            "(docs/performance.md)");
     v.entry("Maximum rounds", rounds, 10,
             "solves per step: after each, new contacts are paired and the tractions of points still behind a surface "
             "by more than a tenth of the thickness are raised (augmented Lagrangian); a step ends when nothing changes",
