@@ -560,9 +560,6 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     }
     closest_on_triangle(Xref, surface_.X[T[t][0]], surface_.X[T[t][1]], surface_.X[T[t][2]], w);
     double d2 = distance2(x[v], w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]);
-    // The spring's direction: from the sample out to the target point (the gradient of the distance,
-    // also right where the target lies on an edge or a corner), or the target's normal when the two
-    // points coincide or disagree about which side is out.
     auto behind = [&](int tri, const double ww[3]) {  // the sample lies behind the target's face
       const Vec face = triangle_normal(x[T[tri][0]], x[T[tri][1]], x[T[tri][2]]);
       return dot((ww[0] * x[T[tri][0]] + ww[1] * x[T[tri][1]] + ww[2] * x[T[tri][2]]) - x[v], face) > 0.0;
@@ -583,6 +580,9 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
         refined = 0;
       }
     }
+    // The spring's direction: from the sample out to the target point (the gradient of the distance,
+    // also right where the target lies on an edge or a corner), or the target's normal when the two
+    // points coincide or disagree about which side is out.
     const Vec face = triangle_normal(x[T[t][0]], x[T[t][1]], x[T[t][2]]);
     const Vec d = (w[0] * x[T[t][0]] + w[1] * x[T[t][1]] + w[2] * x[T[t][2]]) - x[v];
     const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;

@@ -792,7 +792,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     auto group = m.group;
     group->computeF();
     report.initial_residual = group->getNormF();
-    state.policy.start(reference > 0.0 ? std::max(reference, report.initial_residual) : report.initial_residual);
+    state.policy.start(std::max(reference, report.initial_residual));  // reference 0: this solve's own
     auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
     auto converged = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     // Unscaled: the plain L2 norm of the force residual, as the paper's criterion (NOX scales by

@@ -99,7 +99,6 @@ inline ContactSpringLaw contact_spring_law(double s, double eps) {
   return {0.5 * s * s - 0.5 * eps * s + eps * eps / 6.0, s - 0.5 * eps, 1.0};
 }
 
-
 struct ContactSettings {
   bool self = true;
   double stiffness = 0.0;  // k: traction per unit of penetration (> 0)
