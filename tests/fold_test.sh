@@ -2,7 +2,10 @@
 # Self contact end to end: the slab of scenes/fold.xml folded onto itself by bones, run by sinew as a
 # user runs it, then checked from its HDF5 output by scripts/sinew-interpenetration (an independent
 # count of boundary nodes inside non-ring elements): none with contact on 1 rank and on 2 ranks, which
-# agree to 1e-6; some without contact (so the check can fail).
+# agree to 1e-3; some without contact (so the check can fail). Not to 1e-6 as before contact regroups
+# (Solver/'Regroup after'): a regroup freezes a new or turned spring at a state the solve has not
+# converged to, and 1 and 2 ranks get there by different paths (MueLu differs: 20 and 220 CG in the
+# last step), so their end states differ within the tolerance's equilibria: 6.9e-5 when measured.
 # usage: fold_test.sh SINEW SCENE OUTDIR MPIEXEC [MPI flags...]
 set -euo pipefail
 sinew=$1 scene=$2 out=$3
@@ -30,5 +33,5 @@ ua = a["displacement"][:][np.argsort(ma["node_gid"][:])]
 ub = b["displacement"][:][np.argsort(mb["node_gid"][:])]
 d = np.abs(ua - ub).max() / np.abs(ua).max()
 print(f"1 rank vs 2 ranks: max |u1 - u2| / max |u1| = {d:.2e}")
-sys.exit(0 if d < 1e-6 else 1)
+sys.exit(0 if d < 1e-3 else 1)
 PY

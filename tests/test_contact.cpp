@@ -22,6 +22,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 using namespace sinew;
 using namespace sinew::test;
@@ -201,6 +202,107 @@ TEST(Contact, NodeRelaxationLeavesTheSpringsNodesWhereTheyAre) {
     } else {
       EXPECT_GT(spring_moved, 0);
     }
+  }
+}
+
+// Every spring on every rank, by its four nodes (global ids), with its traction.
+std::map<std::array<long long, 4>, double> all_springs(const ContactTerm& contact) {
+  std::vector<double> mine;
+  for (const auto& p : contact.pairs())
+    mine.insert(mine.end(), {double(p.node[0]), double(p.node[1]), double(p.node[2]), double(p.node[3]), p.lambda});
+  const std::vector<double> all = allgatherv(raw_comm(*world()), mine);
+  std::map<std::array<long long, 4>, double> out;
+  for (std::size_t k = 0; k + 4 < all.size(); k += 5)
+    out[{(long long)all[k], (long long)all[k + 1], (long long)all[k + 2], (long long)all[k + 3]}] = all[k + 4];
+  return out;
+}
+
+// A regroup (inside a solve that has not converged) pairs the samples that went in since the last
+// detection, keeps every existing spring with the traction it had (Uzawa's update waits for a
+// converged state; a detection between solves would raise them at the same state), and reports
+// nothing when nothing changed.
+TEST(Contact, ARegroupAddsTheSamplesThatWentInAndKeepsTheTractions) {
+  System sys(world(), two_blocks(), snh());
+  ContactSettings cs;
+  cs.stiffness = 2e4;
+  cs.thickness = 0.02;
+  cs.margin = 0.03;
+  auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
+  sys.add_term(contact);
+  auto u = sys.create_vector();
+  // The upper block tilted down towards x = 1 by `push` there and by push - 0.1 at x = 0 (the blocks
+  // are 0.1 apart): the side at x = 1 goes in first.
+  auto tilt = [&](double push) {
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long gid) {
+      return (c == 2 && X[2] > 1.05 ? -(push - 0.1 * (1.0 - X[0])) : 0.0) + 0.004 * hash_unit(gid, c);
+    });
+  };
+  tilt(0.12);
+  contact->detect(*u);
+  tilt(0.14);
+  contact->detect(*u, true);  // between solves: tractions raised for samples behind their targets
+  sys.update_pattern();
+  const auto before = all_springs(*contact);
+  int traction = 0;
+  for (const auto& [nodes, lambda] : before) traction += lambda > 0.0;
+  ASSERT_GT(traction, 0);
+  tilt(0.25);  // further in: the whole face inside, the first samples deeper
+  const System::Round r = sys.regroup(*u);
+  EXPECT_TRUE(r.again);
+  ASSERT_EQ(r.lines.size(), 1u);
+  EXPECT_NE(r.lines[0].find("contact regroup"), std::string::npos);
+  const auto after = all_springs(*contact);
+  EXPECT_GT(after.size(), before.size());
+  int kept = 0;
+  for (const auto& [nodes, lambda] : before) {
+    auto it = after.find(nodes);
+    if (it == after.end()) continue;
+    ++kept;
+    EXPECT_EQ(it->second, lambda);
+  }
+  EXPECT_GT(kept, 0);
+  // At the same state again: nothing new, no line, and the evaluation has every spring's columns.
+  const System::Round again = sys.regroup(*u);
+  EXPECT_FALSE(again.again);
+  EXPECT_TRUE(again.lines.empty());
+  EXPECT_TRUE(std::isfinite(sys.evaluate(*u, nullptr, nullptr).energy));
+  // A detection between solves at this state would have raised them: the test above can fail.
+  contact->detect(*u, true);
+  int raised = 0;
+  for (const auto& [nodes, lambda] : all_springs(*contact)) {
+    auto it = before.find(nodes);
+    raised += it != before.end() && lambda > it->second;
+  }
+  EXPECT_GT(raised, 0);
+}
+
+// 'Keep springs across steps': a step's first round starts from the springs the last step converged
+// with (all kept, reported as such); without it, or after a failed attempt, it pairs afresh.
+TEST(Contact, AStepKeepsItsLastStatesSpringsOnlyWhenAskedAndNotAfterAFailure) {
+  for (bool keep : {true, false}) {
+    SCOPED_TRACE(keep ? "keep" : "fresh");
+    System sys(world(), two_blocks(), snh());
+    ContactSettings cs;
+    cs.stiffness = 2e4;
+    cs.thickness = 0.02;
+    cs.margin = 0.05;
+    cs.keep = keep;
+    auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
+    sys.add_term(contact);
+    auto u = sys.create_vector();
+    press(sys, *u, 0.13);
+    sys.round(*u, 0);
+    sys.end_step(*u);
+    const long long pairs = contact->global_pairs();
+    ASSERT_GT(pairs, 10);
+    const std::string kept = "(" + std::to_string(pairs) + " kept";
+    const System::Round next = sys.round(*u, 0);  // the next step, from the same state
+    ASSERT_EQ(next.lines.size(), 1u);
+    EXPECT_EQ(next.lines[0].find(kept) != std::string::npos, keep) << next.lines[0];
+    EXPECT_EQ(next.lines[0].find("(0 kept") != std::string::npos, !keep) << next.lines[0];
+    sys.abandon_step();  // that attempt failed: the cut one pairs afresh
+    const System::Round cut = sys.round(*u, 0);
+    EXPECT_NE(cut.lines[0].find("(0 kept"), std::string::npos) << cut.lines[0];
   }
 }
 

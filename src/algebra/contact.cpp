@@ -392,12 +392,12 @@ struct ContactTerm::Candidate {
   double lambda;
 };
 
-ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
+ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multipliers, double slide) {
   const auto t0 = std::chrono::steady_clock::now();
   ContactDetection stats;
   const MPI_Comm comm = raw_comm(*system_.comm());
   Positions at(system_, u);
-  long long raised = update_collider_tractions(at, keep);
+  long long raised = multipliers ? update_collider_tractions(at, keep) : 0;
   MPI_Allreduce(&raised, &stats.raised, 1, MPI_LONG_LONG, MPI_SUM, comm);
 
   pairs_.clear();
@@ -419,7 +419,7 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep) {
   // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
   // inside test cannot tell it more).
   std::vector<char> paired(surface_.vertices(), 0);
-  std::vector<Candidate> kept = keep ? kept_candidates(at, last, paired, stats) : std::vector<Candidate>();
+  std::vector<Candidate> kept = keep ? kept_candidates(at, last, paired, multipliers, slide, stats) : std::vector<Candidate>();
   // A sample paired again after a fresh start carries its traction.
   std::vector<double> carried(surface_.vertices(), 0.0);
   if (!keep)  // (a pair that no longer pushes has dropped its traction already)
@@ -481,7 +481,8 @@ bool ContactTerm::excluded(int t, int v) const {
 }
 
 std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions& at, const std::vector<Chosen>& previous,
-                                                                 std::vector<char>& paired, ContactDetection& stats) const {
+                                                                 std::vector<char>& paired, bool multipliers, double slide,
+                                                                 ContactDetection& stats) const {
   // Every rank decides the same from the replicated positions.
   const auto& T = surface_.triangles;
   const auto& x = at.surface;
@@ -492,13 +493,16 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
     const Vec n{c.normal[0], c.normal[1], c.normal[2]};
     const double g = dot(x[c.vertex] - q, n);
     if (g > settings_.margin) continue;
-    paired[c.vertex] = g < 0.0 ? 2 : 1;
+    if (slide < HUGE_VAL && norm(x[c.vertex] - q - g * n) > slide) continue;  // slid off: paired afresh
+    paired[c.vertex] = std::max<char>(paired[c.vertex], g < 0.0 ? 2 : 1);
     double lambda = c.lambda;
     const double clear = clearance_[c.vertex];  // the thickness, or less where it touched at rest
     // Uzawa: the traction that would have held it at its clearance, for a sample pushed deeper than the
     // onset (where a sharp onset's spring would hold it at its clearance, a smooth one rests inside the
     // onset's width by design: raising it there only costs solves) by a tenth of the thickness.
-    if (g < clear - settings_.onset - 0.1 * delta) {
+    if (!multipliers) {
+      // (a regroup: the tractions stay as the last converged state left them)
+    } else if (g < clear - settings_.onset - 0.1 * delta) {
       lambda = std::max(0.0, lambda + k * (clear - g));
       ++stats.raised;
     } else if (lambda / k + clear - g <= 0.0) {
@@ -660,7 +664,6 @@ long long ContactTerm::choose(std::vector<Candidate> all, ContactDetection& stat
   // (up to four: a sample in a crease is pushed by both sides, where one frozen plane would let it slip
   // in past its target's edge); a sample with no kept pair takes its inside pair, or else its nearest
   // proximity one.
-  const double delta = settings_.thickness;
   std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
     if (a.vertex != b.vertex) return a.vertex < b.vertex;
     if (a.kind != b.kind) return a.kind < b.kind;
@@ -748,7 +751,15 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   // The first round pairs afresh at the step's first guess; later ones keep those pairs and add the
   // samples the last solve pushed into contact. The step ends when a detection adds none, or after
   // the maximum of solves; either way the end state has been looked at.
-  const ContactDetection d = detect(u, round > 0);
+  // With `keep`, a step starts from the springs its last state converged with, so that a small increment
+  // starts near equilibrium (a fresh detection pairs each sample with one target, where a sample in a
+  // crease held by two sides went in again in the first iterations: BCN's steps 16-30 took 413 Newton
+  // iterations fresh, 153 kept); a pair whose sample has slid farther than the margin along its
+  // target's plane is dropped and the sample paired afresh. After a failed attempt, or with no springs
+  // yet, the detection is fresh (abandon_step). Off by default: kept, BCN's clip stopped at step 41.
+  const bool fresh = round == 0 && (fresh_start_ || !settings_.keep);
+  const ContactDetection d = fresh ? detect(u, false) : detect(u, true, round > 0, round == 0 ? settings_.margin : HUGE_VAL);
+  if (round == 0) fresh_start_ = false;
   step_.rounds += 1;
   step_.seconds += d.seconds;
   step_.pairs = global_pairs_;
@@ -781,11 +792,33 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   return r;
 }
 
-void ContactTerm::end_step(const Vector&) { commit(); }
+std::string ContactTerm::regroup(const Vector& u) {
+  if (!settings_.self) return {};
+  const ContactDetection d = detect(u, true, false);
+  step_.seconds += d.seconds;
+  step_.pairs = global_pairs_;
+  if (d.added == 0) return {};
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "contact regroup: %lld pairs (%lld kept, %lld inside, %lld near the surface, %lld refrozen), %.2f s",
+                global_pairs_, d.kept, d.inside, d.proximity, d.refrozen, d.seconds);
+  return buf;
+}
 
-// A failed solve: the next attempt starts from the pairs and tractions this one found (as the rounds
-// of a cut step always did), so a restart inside the cut step starts where the run would.
-void ContactTerm::abandon_step() { commit(); }
+void ContactTerm::end_step(const Vector&) {
+  commit();
+  fresh_start_ = false;
+}
+
+// A failed solve: the next attempt pairs afresh at its first guess (round()), carrying the tractions
+// this one found, as the rounds of a cut step always did. With 'Keep springs across steps', not from
+// the failed attempt's springs: they held another state (BCN's step 31 started each cut at |F| = 111
+// with an increment of 2e-4); nor from the last converged state's: a cut that failed from there failed
+// the same way at every increment (a slide off an unstable equilibrium the kept springs allow). A
+// restart inside the cut step starts where the run would (save_state keeps the choice).
+void ContactTerm::abandon_step() {
+  commit();
+  fresh_start_ = true;
+}
 
 void ContactTerm::commit() {
   committed_chosen_ = chosen_;
@@ -801,6 +834,7 @@ void ContactTerm::save_state(TermState& state) const {
                                c.normal[0], c.normal[1], c.normal[2], c.lambda});
   }
   state.shared.emplace_back("pairs", std::move(pairs));
+  state.shared.emplace_back("fresh start", std::vector<double>{fresh_start_ ? 1.0 : 0.0});
   if (!colliders_.empty()) {
     // Per owned node, its traction on each collider (0 off the surface).
     TermState::Nodal n{"collider tractions", static_cast<int>(colliders_.size()), {}};
@@ -831,6 +865,9 @@ void ContactTerm::load_state(const TermState& state) {
       for (std::size_t c = 0; c < colliders_.size(); ++c)
         collider_lambda_[i * colliders_.size() + c] = n->values[owned_samples_[i] * colliders_.size() + c];
   }
+  // (Absent from checkpoints written before steps kept their springs: those paired afresh.)
+  const std::vector<double>* fresh = state.find_shared("fresh start");
+  fresh_start_ = !fresh || fresh->empty() || (*fresh)[0] != 0.0;
   install();
   commit();
 }

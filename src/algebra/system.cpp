@@ -217,6 +217,22 @@ System::Round System::round(const Vector& u, int round) {
   return r;
 }
 
+System::Round System::regroup(const Vector& u) {
+  Round r;
+  for (const auto& term : terms_) {
+    std::string line = term->regroup(u);
+    if (line.empty()) continue;
+    r.again = true;
+    r.lines.push_back(std::move(line));
+  }
+  r.pattern_changed = update_pattern();
+  return r;
+}
+
+bool System::regroups() const {
+  return std::any_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->regroups(); });
+}
+
 void System::end_step(const Vector& u) {
   for (const auto& term : terms_) term->end_step(u);
 }

@@ -343,12 +343,32 @@ SolveReport Simulation::solve(Vector& trial, const std::function<void(const Newt
     }
     if (round > 0 && !terms.again) break;  // round 0 always solves
     // A later round's solve starts near equilibrium: its exact Hessian is due relative to the step's
-    // first residual (NonlinearSolver::solve).
-    SolveReport r = solver_->solve(trial, progress, first_residual);
-    if (round == 0) first_residual = r.initial_residual;
-    if (round > 0) r.accumulate(sum);
-    sum = r;
-    if (!r.converged()) break;
+    // first residual (NonlinearSolver::solve). Where a term can regroup (self contact), a solve that has
+    // not converged after 'Regroup after' Newton iterations stops for them to look at its state again
+    // (a sample that slid past its frozen target into the body gets its spring within the solve, not
+    // after it: BCN's crease slid for 40 iterations), then goes on, within 'Maximum iterations' in all.
+    // (Stopping the stops after two regroups in a row that changed nothing measured worse: BCN's clip
+    // 3,161 Newton iterations against 2,216 and 2,415 without, on 2 threads.)
+    const SolverParameters& sp = config_.params.solver;
+    const bool regroup = sp.regroup_after > 0 && sys.regroups();
+    int used = 0;
+    for (int chunk = 0;; ++chunk) {
+      const int budget = regroup && sp.max_iterations - used > sp.regroup_after ? sp.regroup_after : sp.max_iterations - used;
+      SolveReport r = solver_->solve(trial, progress, first_residual, budget);
+      if (round == 0 && chunk == 0) first_residual = r.initial_residual;
+      used += r.newton_iterations;
+      if (round > 0 || chunk > 0) r.accumulate(sum);
+      sum = r;
+      sum.max_iterations = sp.max_iterations;  // what a failure reports: the round's limit, not a chunk's
+      if (r.status != SolveStatus::MaxIterations || used >= sp.max_iterations) break;
+      const auto t0 = std::chrono::steady_clock::now();
+      const System::Round again = sys.regroup(trial);
+      rec.seconds_rounds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      rec.pattern_changes += again.pattern_changed;
+      if (talk_)
+        for (const auto& line : again.lines) std::printf("  %s\n", line.c_str());
+    }
+    if (!sum.converged()) break;
   }
   return sum;
 }

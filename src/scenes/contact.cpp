@@ -64,6 +64,7 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
   if (!(cs.margin > cs.thickness))
     throw InputError("Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" + format_number(cs.thickness) + ")");
   cs.refine = p.refine;
+  cs.keep = p.keep;
   cs.rounds = p.rounds;
   cs.onset = p.smooth ? cs.thickness : 0.0;
   auto term = std::make_shared<ContactTerm>(system, cs, colliders->shapes());

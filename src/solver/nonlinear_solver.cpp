@@ -736,18 +736,22 @@ NonlinearSolver::~NonlinearSolver() = default;
 double NonlinearSolver::absolute_tolerance() const { return impl_->params.absolute_tolerance; }
 void NonlinearSolver::set_interrupt(std::function<bool()> interrupt) { impl_->interrupt = std::move(interrupt); }
 
-SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress, double reference) {
+SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress, double reference,
+                                   int budget) {
   const Vector start(u, Teuchos::Copy);
   using Inverted = SolverParameters::Inverted;
   const Inverted inv = impl_->params.inverted;
   const auto inverted = inv == Inverted::Exact      ? HessianPolicy::Inverted::Exact
                         : inv == Inverted::PerPoint ? HessianPolicy::Inverted::PerPoint
                                                     : HessianPolicy::Inverted::WholeMesh;
-  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted), reference);
-  if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used) {
+  const int iterations = budget > 0 ? std::min(budget, impl_->params.max_iterations) : impl_->params.max_iterations;
+  SolveReport report = solve_once(u, progress, HessianPolicy(impl_->params.exact_below, inverted), reference, iterations);
+  // (A solve stopped by its budget is to be continued, not redone.)
+  const bool budget_spent = report.status == SolveStatus::MaxIterations && iterations < impl_->params.max_iterations;
+  if (!report.converged() && report.status != SolveStatus::Interrupted && report.exact_hessian_used && !budget_spent) {
     // The unprojected Hessian may be indefinite where the state is not a minimum yet: redo with projection.
     u.assign(start);
-    SolveReport second = solve_once(u, progress, HessianPolicy(0.0), 0.0);
+    SolveReport second = solve_once(u, progress, HessianPolicy(0.0), 0.0, impl_->params.max_iterations);
     second.accumulate(report);
     report = second;
   }
@@ -756,9 +760,9 @@ SolveReport NonlinearSolver::solve(Vector& u, const std::function<void(const New
 }
 
 SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress,
-                                        HessianPolicy policy, double reference) {
+                                        HessianPolicy policy, double reference, int max_iterations) {
   SolveReport report;
-  report.max_iterations = impl_->params.max_iterations;
+  report.max_iterations = max_iterations;
   Impl& m = *impl_;
   const SolverParameters& p = m.params;
   const auto t0 = Clock::now();
@@ -803,7 +807,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
       converged->addStatusTest(Teuchos::rcp(new NOX::StatusTest::NormF(*group, p.relative_tolerance,
                                                                        NOX::Abstract::Vector::TwoNorm,
                                                                        NOX::StatusTest::NormF::Unscaled)));
-    auto maxiters = Teuchos::rcp(new NOX::StatusTest::MaxIters(p.max_iterations));
+    auto maxiters = Teuchos::rcp(new NOX::StatusTest::MaxIters(max_iterations));
     auto tests = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     tests->addStatusTest(finite);
     tests->addStatusTest(converged);

@@ -12,6 +12,7 @@
 //   round(u, r)          before the step's first solve (r = 0) and after each converged solve (r >= 1):
 //                        a term whose energy depends on the state it was set up at (contact pairs, a
 //                        Uzawa multiplier) updates it and asks for another solve
+//   regroup(u)           inside a solve that is slow to converge: the set-up again, multipliers kept
 //   end_step(u)          the step converged at u; abandon_step(): it failed and is cut
 //   save_state/load_state  what a restart needs besides the displacement (checkpoint.h5)
 // and says how it is reported: its log columns, lines of the step's summary, node fields of the step
@@ -143,6 +144,16 @@ class EnergyTerm {
     (void)round;
     return {};
   }
+  // Within a solve that has gone a while without converging (Solver/'Regroup after'): a term whose
+  // set-up goes stale as the state moves (contact pairs, which samples slide past) may set it up again
+  // at u, leaving what only a converged state may change (Uzawa multipliers) as it is. Returns a line
+  // for the progress output, empty when nothing changed. Collective.
+  virtual std::string regroup(const Vector& u) {
+    (void)u;
+    return {};
+  }
+  // Whether regroup can change anything (the driver stops a slow solve for it only then).
+  virtual bool regroups() const { return false; }
   virtual void end_step(const Vector& u) { (void)u; }
   virtual void abandon_step() {}
   virtual void save_state(TermState& state) const { (void)state; }

@@ -114,6 +114,10 @@ class System {
     std::vector<std::string> lines;
   };
   Round round(const Vector& u, int round);
+  // Every term's regroup at u (a solve that has not converged yet) and the pattern grown: `again` says
+  // some term changed its energy, `lines` what they report.
+  Round regroup(const Vector& u);
+  bool regroups() const;  // some term's regroup can change its energy
   void end_step(const Vector& u);
   void abandon_step();
   // Every term's state, by term name; load_states gives each term its own (a term whose name the

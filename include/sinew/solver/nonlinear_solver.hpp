@@ -30,7 +30,7 @@ struct SolverParameters {
   enum class Update { WhenNeeded, EveryNewtonIteration };
   enum class Inverted { Exact, PerPoint, WholeMesh };
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
-  int max_iterations = 0;
+  int max_iterations = 0, regroup_after = 0;
   LineSearch line_search = LineSearch::Backtrack;
   Merit merit = Merit::Energy;
   Forcing forcing = Forcing::Type2;
@@ -53,6 +53,15 @@ struct SolverParameters {
             "also converged when the residual norm falls below this times the step's first (0: off)",
             Range::closed_open(0.0, 1.0));
     v.entry("Maximum iterations", max_iterations, 50, "Newton iterations per load step", Range::closed(1, 1e6));
+    // Default 5, measured on BCN_Epileptic's clip with self contact (docs/performance.md): against 0,
+    // steps 31-36 from a checkpoint 214 Newton iterations where 0 failed at step 33; 2, 3, 4, 10 and 15
+    // gave 657, 419, 223, 417 and 530.
+    v.entry("Regroup after", regroup_after, 5,
+            "a solve not converged after this many Newton iterations stops for the terms to set themselves up "
+            "again at its state (self contact: samples that slid past their frozen targets into the body get "
+            "springs; the tractions wait for a converged state) and goes on, up to 'Maximum iterations' in "
+            "all (0: never)",
+            Range::closed(0, 1e6));
     v.choice("Line search", line_search, LineSearch::Backtrack,
              Choices<LineSearch>{{"backtrack", LineSearch::Backtrack},
                                  {"polynomial", LineSearch::Polynomial},
@@ -169,7 +178,11 @@ class NonlinearSolver {
   // solve of the same load step (another contact round) passes the step's first: it starts near
   // equilibrium, where the exact Hessian is due at once, and would otherwise wait for its own residual
   // to fall a hundredfold under projection, which converges linearly.
-  SolveReport solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress = {}, double reference = 0.0);
+  // `budget` > 0: stop after that many Newton iterations (at most 'Maximum iterations'), status
+  // MaxIterations, with u where they left it, to be continued by another call (a contact regroup in
+  // between); such a stop is not redone with projection as a failed solve is.
+  SolveReport solve(Vector& u, const std::function<void(const NewtonIterate&)>& progress = {}, double reference = 0.0,
+                    int budget = 0);
 
   // The tangent predictor of a load step: from the equilibrium u0 (of the last load), the linearised
   // response to trial (the step's guess: the new prescribed values, free nodes where a rig's skinning
@@ -189,7 +202,7 @@ class NonlinearSolver {
 
  private:
   SolveReport solve_once(Vector& u, const std::function<void(const NewtonIterate&)>& progress, HessianPolicy policy,
-                         double reference);
+                         double reference, int max_iterations);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

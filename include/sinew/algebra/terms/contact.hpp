@@ -50,6 +50,7 @@
 #include <sinew/discretization/boundary.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string>
@@ -107,6 +108,7 @@ struct ContactSettings {
   bool refine = true;      // walk targets to the closest deformed-surface point
   int rounds = 10;         // at most this many detect-and-solve rounds per step (round())
   double onset = 0.0;      // the stretch over which a spring's stiffness ramps from 0 to k (0: sharp)
+  bool keep = false;       // a step's first detection keeps the last converged state's springs (round())
 };
 
 // What one detection pass found (global counts).
@@ -140,6 +142,10 @@ class ContactTerm final : public EnergyTerm {
   void set_load(double t) override;
   void begin_step(const StepStart& s) override;
   RoundResult round(const Vector& u, int round) override;
+  // A detection in keep mode at a state the solve has not converged to: samples that slid past their
+  // frozen targets and went in get their springs now rather than after the solve (tractions kept).
+  std::string regroup(const Vector& u) override;
+  bool regroups() const override { return settings_.self; }
   void end_step(const Vector& u) override;
   void abandon_step() override;
   void save_state(TermState& state) const override;
@@ -169,7 +175,11 @@ class ContactTerm final : public EnergyTerm {
   // and every spring (and collider contact) whose sample lies behind its target by more than a tenth
   // of the thickness has its multiplier raised. Without `keep`, a sample paired again carries the
   // multiplier it had.
-  ContactDetection detect(const Vector& u, bool keep = false);
+  // With `multipliers` false (a regroup inside a solve), no traction is raised or dropped: the state is
+  // not converged, and Uzawa's update needs one that is.
+  // `slide`: a kept pair whose sample lies farther than this from its target point along the target's
+  // plane is dropped (and the sample paired afresh).
+  ContactDetection detect(const Vector& u, bool keep = false, bool multipliers = true, double slide = HUGE_VAL);
   void set_collider_pose(std::size_t k, const Rigid& pose) { poses_[k] = pose; }
   std::size_t colliders() const { return colliders_.size(); }
   const SurfaceMesh& surface() const { return surface_; }
@@ -219,6 +229,7 @@ class ContactTerm final : public EnergyTerm {
     double beta[3], normal[3], lambda;
   };
   std::vector<Chosen> chosen_;
+  bool fresh_start_ = true;  // the next step's first detection pairs afresh (none yet, or after a failed attempt)
   // Per round of this step: its pairs (sample, triangle; sorted) and the deepest sample inside.
   std::vector<std::pair<std::vector<std::pair<int, int>>, double>> round_pairs_;
   // The detection's steps (contact.cpp).
@@ -228,7 +239,7 @@ class ContactTerm final : public EnergyTerm {
   void gather_surface(Positions& at) const;
   bool excluded(int triangle, int vertex) const;  // the triangle touches the vertex's ring at rest
   std::vector<Candidate> kept_candidates(const Positions& at, const std::vector<Chosen>& previous, std::vector<char>& paired,
-                                         ContactDetection& stats) const;
+                                         bool multipliers, double slide, ContactDetection& stats) const;
   std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
                                            const std::vector<double>& carried, ContactDetection& stats) const;
   // Moves target triangle t and weights w of sample v to the closest deformed-surface point nearby.
