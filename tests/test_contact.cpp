@@ -57,6 +57,21 @@ std::vector<double> term_force(const System& sys, const EnergyTerm& term, const 
   return gather(*f);
 }
 
+// The springs the two-block tests use (k = 2e4, thickness 0.02) with the given margin, and the term made
+// with them (no colliders) and added to the system.
+ContactSettings block_springs(double margin) {
+  ContactSettings cs;
+  cs.stiffness = 2e4;
+  cs.thickness = 0.02;
+  cs.margin = margin;
+  return cs;
+}
+std::shared_ptr<ContactTerm> add_springs(System& sys, const ContactSettings& cs) {
+  auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
+  sys.add_term(contact);
+  return contact;
+}
+
 // The upper block pushed down by `push` (into the lower one when push > 0.1) with a small wiggle.
 void press(const System& sys, Vector& u, double push) {
   set_displacement(sys, u, [&](const std::array<double, 3>& X, int c, long long gid) {
@@ -75,13 +90,9 @@ TEST(Contact, SpringsHaveTheGradientAndHessianOfTheirEnergy) {
   for (double onset : {0.0, 0.02}) {
   SCOPED_TRACE("onset " + std::to_string(onset));
   System sys(world(), two_blocks(), snh());
-  ContactSettings cs;
-  cs.stiffness = 2e4;
-  cs.thickness = 0.02;
-  cs.margin = 0.2;
+  ContactSettings cs = block_springs(0.2);
   cs.onset = onset;
-  auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
-  sys.add_term(contact);
+  auto contact = add_springs(sys, cs);
   auto u = sys.create_vector();
   press(sys, *u, 0.13);
   const ContactDetection d = contact->detect(*u);
@@ -164,10 +175,7 @@ TEST(Contact, NodeRelaxationLeavesTheSpringsNodesWhereTheyAre) {
   for (bool with_contact : {true, false}) {
     SCOPED_TRACE(with_contact ? "contact" : "no contact");
     System sys(world(), two_blocks(), snh());
-    ContactSettings cs;
-    cs.stiffness = 2e4;
-    cs.thickness = 0.02;
-    cs.margin = 0.2;
+    ContactSettings cs = block_springs(0.2);
     cs.onset = 0.02;
     auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
     if (with_contact) sys.add_term(contact);
@@ -223,12 +231,7 @@ std::map<std::array<long long, 4>, double> all_springs(const ContactTerm& contac
 // nothing when nothing changed.
 TEST(Contact, ARegroupAddsTheSamplesThatWentInAndKeepsTheTractions) {
   System sys(world(), two_blocks(), snh());
-  ContactSettings cs;
-  cs.stiffness = 2e4;
-  cs.thickness = 0.02;
-  cs.margin = 0.03;
-  auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
-  sys.add_term(contact);
+  auto contact = add_springs(sys, block_springs(0.03));
   auto u = sys.create_vector();
   // The upper block tilted down towards x = 1 by `push` there and by push - 0.1 at x = 0 (the blocks
   // are 0.1 apart): the side at x = 1 goes in first.
@@ -282,13 +285,9 @@ TEST(Contact, AStepKeepsItsLastStatesSpringsOnlyWhenAskedAndNotAfterAFailure) {
   for (bool keep : {true, false}) {
     SCOPED_TRACE(keep ? "keep" : "fresh");
     System sys(world(), two_blocks(), snh());
-    ContactSettings cs;
-    cs.stiffness = 2e4;
-    cs.thickness = 0.02;
-    cs.margin = 0.05;
+    ContactSettings cs = block_springs(0.05);
     cs.keep = keep;
-    auto contact = std::make_shared<ContactTerm>(sys, cs, std::vector<ColliderShape>{});
-    sys.add_term(contact);
+    auto contact = add_springs(sys, cs);
     auto u = sys.create_vector();
     press(sys, *u, 0.13);
     sys.round(*u, 0);
