@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
 # Sinew's performance suite: one command, a JSON file, a Markdown table and PNG plots.
-#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--skin-caches] [--rigs] [--quick]
+#   bash perf/run.sh [--deps-cache DIR] [--out DIR] [--large] [--character] [--skin-caches] [--rigs] [--drop] [--quick]
 # --large adds the paper's stretch at its resolution (58x58x116 cells, 969k DOFs, all 12 steps; about
 # 10 minutes); --character the paper-scale human (inputs/human.xml, 48k cells) with Stable Neo-Hookean
 # and with corotational, its whole crouch, and SNH with the preconditioner updated at every Newton
 # iteration (about 9 minutes); --skin-caches what writing the skin's glTF and PC2 caches costs on a
 # 4,902-vertex skin over 101 frames (sizes and seconds); --rigs the corpus of rigs nobody tuned (every
 # rigged, animated asset of assimp-testmodels as a new user writes the scene, quasi-static and with
-# inertia at 24 fps, to each clip's end: perf/rig_corpus.py; about an hour); --quick uses the smallest
-# sizes only (with --rigs: the first quarter of each clip).
+# inertia at 24 fps, to each clip's end: perf/rig_corpus.py; about an hour); --drop the paper's dynamic
+# drop at its size (Fig. 11: 394,268 tets, 10 substeps a frame; here inputs/squash.xml with the blob
+# meshed by gmsh at 3.8 mm, 411,665 tets, 216k DOFs), seconds per frame over its 48 frames (hours on
+# 2 cores; with --quick its first 2 frames); --quick uses the smallest sizes only (with --rigs: the first
+# quarter of each clip).
 # Timings on a shared machine are noisy: the report gives the best of a few repetitions where it can.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/.." && pwd)
 out=$repo/results/perf
-large=0 quick=0 character=0 skin_caches=0 rigs=0
+large=0 quick=0 character=0 skin_caches=0 rigs=0 drop=0
 build_args=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -23,6 +26,7 @@ while [ $# -gt 0 ]; do
     --character) character=1; shift ;;
     --skin-caches) skin_caches=1; shift ;;
     --rigs) rigs=1; shift ;;
+    --drop) drop=1; shift ;;
     --quick) quick=1; shift ;;
     --deps-cache|--build-dir) build_args+=("$1" "$2"); shift 2 ;;
     -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
@@ -186,6 +190,24 @@ if [ $rigs -eq 1 ]; then
   rig_args=(--sinew "$build/sinew" --out "$out/rigs")
   [ $quick -eq 1 ] && rig_args+=(--quick)
   omp 2 /usr/bin/python3 "$here/rig_corpus.py" "${rig_args[@]}" | tee "$out/rigs.txt"
+fi
+
+# The paper's drop at its size (issue 40, item 6; Fig. 11: 20.8 s a frame on 8 cores and a GPU). gmsh
+# runs as a separate program (GPL: never linked).
+if [ $drop -eq 1 ]; then
+  mkdir -p "$out/scenes"
+  mesh=$(cd "$out/scenes" && pwd)/blob_paper.msh  # absolute: the scene resolves paths from its folder
+  log "the paper-size drop: meshing the blob at 3.8 mm (gmsh)"
+  gmsh -3 -setnumber h 0.0038 -format msh41 -bin "$repo/inputs/meshes/blob.geo" -o "$mesh" > "$out/scenes/blob_paper.gmsh.log"
+  frames=48; [ $quick -eq 1 ] && frames=2
+  sed -e "s|value=\"meshes/blob.msh\"|value=\"$mesh\"|" \
+      -e "s|<Parameter name=\"Frames\" type=\"int\" value=\"48\"/>|<Parameter name=\"Frames\" type=\"int\" value=\"$frames\"/>|" \
+      "$repo/inputs/squash.xml" > "$out/scenes/drop_paper.xml"
+  grep -q "blob_paper.msh" "$out/scenes/drop_paper.xml" || { echo "perf/run.sh: could not point the drop at its mesh" >&2; exit 1; }
+  scene drop_paper_1x2 "$out/scenes/drop_paper.xml" 1 2
+  # Seconds per frame from the run's own total (the mesh's reading and set-up included).
+  done_s=$(sed -n 's/^done in \([0-9.]*\) s.*/\1/p' "$out/scenes/drop_paper_1x2.out")
+  echo "drop at the paper's size: $frames frames, ${done_s:-?} s, $(awk -v s="${done_s:-0}" -v f=$frames 'BEGIN {printf "%.1f", s / f}') s per frame (the paper: 20.8)" | tee "$out/drop_paper.txt"
 fi
 
 log "report"
