@@ -493,7 +493,7 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
     const Vec n{c.normal[0], c.normal[1], c.normal[2]};
     const double g = dot(x[c.vertex] - q, n);
     if (g > settings_.margin) continue;
-    if (slide < HUGE_VAL && norm(x[c.vertex] - q - g * n) > slide) continue;  // slid off: paired afresh
+    if (norm(x[c.vertex] - q - g * n) > slide) continue;  // slid off along its plane: paired afresh
     paired[c.vertex] = std::max<char>(paired[c.vertex], g < 0.0 ? 2 : 1);
     double lambda = c.lambda;
     const double clear = clearance_[c.vertex];  // the thickness, or less where it touched at rest
@@ -759,7 +759,6 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   // yet, the detection is fresh (abandon_step). Off by default: kept, BCN's clip stopped at step 41.
   const bool fresh = round == 0 && (fresh_start_ || !settings_.keep);
   const ContactDetection d = fresh ? detect(u, false) : detect(u, true, round > 0, round == 0 ? settings_.margin : HUGE_VAL);
-  if (round == 0) fresh_start_ = false;
   step_.rounds += 1;
   step_.seconds += d.seconds;
   step_.pairs = global_pairs_;
@@ -793,7 +792,7 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
 }
 
 std::string ContactTerm::regroup(const Vector& u) {
-  if (!settings_.self) return {};
+  if (!regroups()) return {};
   const ContactDetection d = detect(u, true, false);
   step_.seconds += d.seconds;
   step_.pairs = global_pairs_;
