@@ -565,4 +565,15 @@ TEST(PreconditionerLag, EveryTransition) {
   lag.solved(10, 1e-2, true, 10.0);
   lag.stepped(1.0, 6.0);
   EXPECT_TRUE(lag.update(6.0, 1e-2, budget));
+  // One set up for a projected Hessian is not kept for the first exact one; one set up for an exact
+  // Hessian is kept for the next exact one and for a projected one after a fall-back.
+  lag.solved(10, 1e-2, true, 6.0);
+  lag.stepped(1.0, 1.0);
+  EXPECT_TRUE(lag.update(1.0, 1e-2, budget, /*exact=*/true));
+  lag.solved(10, 1e-2, true, 1.0);
+  lag.stepped(1.0, 0.1);
+  EXPECT_FALSE(lag.update(0.1, 1e-2, budget, true));
+  lag.solved(10, 1e-2, true, 0.1);
+  lag.stepped(1.0, 0.01);
+  EXPECT_FALSE(lag.update(0.01, 1e-2, budget, false));
 }

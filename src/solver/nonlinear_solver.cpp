@@ -100,7 +100,7 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     int budget = max_iterations_;
     const SolveState& s = state_();
     s.finish_tolerance();
-    const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget);
+    const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget, s.policy.last_exact());
     // Fault injection for the tests of the redo path: a CG budget that no kept solve meets.
     if (const char* forced = std::getenv("SINEW_KEPT_CG_BUDGET"); forced && !update) budget = std::atoi(forced);
     solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));

@@ -51,11 +51,16 @@ class PreconditionerLag {
 
   // Before a Jacobian's linear solver is initialized, at a state of residual `residual`, for a solve to the
   // relative `tolerance`: update the preconditioner (true), or keep it, with CG limited to `budget`?
-  bool update(double residual, double tolerance, int& budget) {
-    kept_ = enabled_ && !update_next_ && baseline_ > 0.0 && residual < keep_below_;
+  // `exact`: whether this Jacobian is the exact Hessian (HessianPolicy). One set up on a projected Hessian
+  // is never kept for an exact one: where the projection clamped, the exact Hessian is softer along the
+  // very modes the kept hierarchy treats as stiff, and on BCN's whole clip 147 of the 460 switches to the
+  // exact Hessian failed with the kept preconditioner and were redone (an assembly and a failed CG each).
+  bool update(double residual, double tolerance, int& budget, bool exact = false) {
+    kept_ = enabled_ && !update_next_ && baseline_ > 0.0 && residual < keep_below_ && !(exact && !set_up_exact_);
     if (!kept_) {
       update_next_ = false;
       baseline_ = 0.0;
+      set_up_exact_ = exact;
       ++updates_;
       return true;
     }
@@ -116,6 +121,7 @@ class PreconditionerLag {
   bool enabled_;
   double factor_;
   bool update_next_ = true, kept_ = false, redo_ = false;
+  bool set_up_exact_ = false;  // whether the last update was for an exact Hessian
   double baseline_ = 0.0;         // CG iterations per digit of the first solve after the last update
   double keep_below_ = HUGE_VAL;  // after a failure: keep again only once the residual is below this
   double solved_at_ = HUGE_VAL;   // the residual at which the last linear solve's Jacobian was taken
