@@ -7,6 +7,7 @@
 #include "tpetra_test_utils.hpp"
 
 #include <sinew/core/xml_input.hpp>
+#include <sinew/discretization/boundary.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 #include <sinew/scenes/region.hpp>
@@ -608,8 +609,9 @@ TEST(Surface, BoundarySurfacesAreClosedOutwardAndCountedOnAnyNumberOfRanks) {
         EXPECT_NEAR(V, expect, 1e-8) << c.name << " step " << step;
       } else {
         // A hex face is a bilinear patch, which the OBJ splits by one diagonal (triangles 2k, 2k+1:
-        // a-b-c, a-c-d). The volume under a bilinear patch is the mean of its two splits', so the
-        // mean over both diagonals must give the mesh's volume exactly, warped faces and all.
+        // a-b-c, a-c-d or a-b-d, b-c-d, as the element's tets cut it). The volume under a bilinear
+        // patch is the mean of its two splits', so the mean over both diagonals must give the mesh's
+        // volume exactly, warped faces and all.
         double both = 0.0;
         auto tet = [&](int a, int b, int d) {
           const auto &p = o.v[a], &q = o.v[b], &r = o.v[d];
@@ -618,8 +620,9 @@ TEST(Surface, BoundarySurfacesAreClosedOutwardAndCountedOnAnyNumberOfRanks) {
         ASSERT_EQ(o.f.size() % 2, 0u);
         for (std::size_t t = 0; t < o.f.size(); t += 2) {
           const auto &t1 = o.f[t], &t2 = o.f[t + 1];
-          ASSERT_TRUE(t2[0] == t1[0] && t2[1] == t1[2]) << "triangles " << t << " and " << t + 1 << " are not one face's split";
-          const int a = t1[0], b = t1[1], cc = t1[2], d = t2[2];
+          const bool ac = t2[0] == t1[0] && t2[1] == t1[2], bd = t2[0] == t1[1] && t2[2] == t1[2];
+          ASSERT_TRUE(ac || bd) << "triangles " << t << " and " << t + 1 << " are not one face's split";
+          const int a = t1[0], b = t1[1], cc = ac ? t1[2] : t2[1], d = ac ? t2[2] : t1[2];
           both += 0.5 * (tet(a, b, cc) + tet(a, cc, d)) + 0.5 * (tet(a, b, d) + tet(b, cc, d));
         }
         EXPECT_NEAR(both, expect, 1e-8) << "hex8 step " << step;
@@ -633,6 +636,49 @@ TEST(Surface, BoundarySurfacesAreClosedOutwardAndCountedOnAnyNumberOfRanks) {
         }
     }
   }
+}
+
+// The boundary triangles of a hex mesh are faces of its elements' six tets (kHexTets), so that a point
+// in a tet is behind the surface: checked on a jittered box on any number of ranks, every triangle
+// against the tets of the elements holding its three nodes. The faces' first diagonal alone (corners
+// 0-2, as before) gives triangles of faces 4 and 5 that no tet has (the test can fail).
+TEST(Surface, AHexFacesTrianglesAreFacesOfItsElementsTets) {
+  MeshSpec spec;
+  spec.cells = {3, 3, 4};
+  spec.jitter = 0.2;
+  const Mesh m = build_mesh(spec, *Tpetra::getDefaultComm());
+  auto conn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.conn);
+  std::set<std::array<GlobalId, 3>> tet_faces, first_diagonal;
+  for (std::size_t e = 0; e < m.local_elements(); ++e) {
+    for (const auto& t : kHexTets)
+      for (int skip = 0; skip < 4; ++skip) {
+        std::array<GlobalId, 3> f;
+        int k = 0;
+        for (int a = 0; a < 4; ++a)
+          if (a != skip) f[k++] = m.node_gid[conn(e, t[a])];
+        std::sort(f.begin(), f.end());
+        tet_faces.insert(f);
+      }
+    for (const auto& q : kHexFaces)
+      for (const auto& tri : {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+        std::array<GlobalId, 3> f{m.node_gid[conn(e, tri[0])], m.node_gid[conn(e, tri[1])], m.node_gid[conn(e, tri[2])]};
+        std::sort(f.begin(), f.end());
+        first_diagonal.insert(f);
+      }
+  }
+  const LocalBoundary b = local_boundary(m);
+  long long checked = 0, missing = 0, missing_first = 0;
+  for (auto f : b.triangles) {
+    std::sort(f.begin(), f.end());
+    ++checked;
+    missing += !tet_faces.count(f);
+  }
+  // The old split on this rank's faces, for the can-fail half.
+  for (const auto& f : first_diagonal) missing_first += !tet_faces.count(f);
+  EXPECT_GT(checked, 0);
+  EXPECT_EQ(missing, 0);
+  EXPECT_GT(missing_first, 0);
+  for (int f = 0; f < 6; ++f) EXPECT_EQ(hex_face_diagonal(f), f >= 4 ? 1 : 0) << "face " << f;
 }
 
 namespace {

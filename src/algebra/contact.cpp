@@ -30,10 +30,6 @@ double angle_between(const Vec& u, const Vec& v) {
   return std::acos(std::clamp(dot(u, v) / (nu * nv), -1.0, 1.0));
 }
 
-// Hex8 split into six tetrahedra around its 0-6 diagonal (Gmsh/VTK node order): a point of a deformed
-// hex lies in one of them (the paper locates samples in "a tetrahedralization of the hexahedral mesh").
-constexpr int kHexTets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
-
 }  // namespace
 
 // ---- colliders ---------------------------------------------------------------------------------------

@@ -78,8 +78,6 @@ Pattern make_pattern(const MeshSpec& s) {
   return p;
 }
 
-// Kuhn split of a hex (VTK node order) into six positively oriented tets around the diagonal 0-6.
-constexpr int kTets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
 
 }  // namespace
 
@@ -173,7 +171,7 @@ Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {
           m.element_gid[e++] = hex_gid;
         } else {
           for (int t = 0; t < 6; ++t) {
-            for (int a = 0; a < 4; ++a) Ch(e, a) = hex[kTets[t][a]];
+            for (int a = 0; a < 4; ++a) Ch(e, a) = hex[kHexTets[t][a]];
             m.element_gid[e++] = 6 * hex_gid + t;
           }
         }

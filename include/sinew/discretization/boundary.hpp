@@ -1,5 +1,6 @@
 // The boundary surface of a distributed mesh: faces that belong to exactly one element, oriented
-// outward (counter-clockwise seen from outside), hex8 quads split in two along their 0-2 diagonal.
+// outward (counter-clockwise seen from outside), hex8 quads split in two along the diagonal the
+// element's six tets cut them along (hex_face_diagonal): the triangles are the tets' own faces.
 //
 // Found without communicating the volume mesh: a face is counted by the rank that owns its
 // lowest-numbered node, which holds every element around that node (the ghost layer), so it sees every
@@ -22,6 +23,22 @@ struct LocalBoundary {
   std::vector<int> owned_vertices;                  // local owned nodes on the surface
 };
 LocalBoundary local_boundary(const Mesh& mesh);
+
+// The corners (counter-clockwise seen from outside) of the hex face whose split are the consecutive
+// boundary triangles t0, t1: (a, b, c), (a, c, d) or (a, b, d), (b, c, d). False when they are not one
+// face's split.
+template <class Id>
+bool quad_of_triangles(const std::array<Id, 3>& t0, const std::array<Id, 3>& t1, std::array<Id, 4>& quad) {
+  if (t1[0] == t0[0] && t1[1] == t0[2]) {
+    quad = {t0[0], t0[1], t0[2], t1[2]};
+    return true;
+  }
+  if (t1[0] == t0[1] && t1[2] == t0[2]) {
+    quad = {t0[0], t0[1], t1[1], t0[2]};
+    return true;
+  }
+  return false;
+}
 
 // The whole boundary surface, the same on every rank.
 struct SurfaceMesh {

@@ -28,6 +28,23 @@ enum class ElementType { Hex8, Tet4 };
 
 constexpr int nodes_per_element(ElementType t) { return t == ElementType::Hex8 ? 8 : 4; }
 constexpr int quadrature_points(ElementType t) { return t == ElementType::Hex8 ? 8 : 1; }
+
+// A hex8 (VTK node order): its faces, outward (counter-clockwise seen from outside), and its Kuhn split
+// into six positively oriented tets around the diagonal 0-6 (the contact detection's inside test: the
+// paper locates samples in "a tetrahedralization of the hexahedral mesh", Sec. 6; the tet meshes made
+// from hexes; scripts/sinew-interpenetration).
+inline constexpr int kHexFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+inline constexpr int kHexTets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+// The diagonal of hex face f that the six tets cut it along: 0 for its corners 0-2, 1 for 1-3. The
+// boundary surface splits each face the same way, so that its triangles are the tets' own faces.
+constexpr int hex_face_diagonal(int f) {
+  const int a = kHexFaces[f][0], c = kHexFaces[f][2];
+  for (const auto& t : kHexTets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        if (t[i] == a && t[j] == c) return 0;
+  return 1;
+}
 std::string to_string(ElementType t);
 
 inline const Choices<ElementType>& element_choices() {

@@ -131,13 +131,13 @@ struct PressureLoads {
         std::vector<char> in(mesh.local_nodes(), 0);
         for (int n : select_region(mesh, c.comm, load.region, where)) in[n] = 1;
         long long faces = 0, all = 0;
-        // A hex8 face is two consecutive boundary triangles (0, 1, 2) and (0, 2, 3) (boundary.cpp).
+        // A hex8 face is two consecutive boundary triangles (boundary.hpp).
         const bool hex = mesh.type == ElementType::Hex8;
         const std::size_t per_face = hex ? 2 : 1;
         for (std::size_t k = 0; k + per_face <= boundary.triangles.size(); k += per_face) {
           const auto& t0 = boundary.triangles[k];
-          std::array<GlobalId, 4> g{t0[0], t0[1], t0[2], hex ? boundary.triangles[k + 1][2] : -1};
-          if (hex && (boundary.triangles[k + 1][0] != t0[0] || boundary.triangles[k + 1][1] != t0[2]))
+          std::array<GlobalId, 4> g{t0[0], t0[1], t0[2], -1};
+          if (hex && !quad_of_triangles(t0, boundary.triangles[k + 1], g))
             throw std::logic_error("PressureLoads: the boundary's hex8 faces are not consecutive triangle pairs");
           const int corners = hex ? 4 : 3;
           int v[4] = {0, 0, 0, 0};
