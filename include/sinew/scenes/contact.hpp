@@ -100,8 +100,8 @@ struct ContactParameters {
     v.entry("Keep springs across steps", keep, false,
             "self contact: a step starts from the springs its last state converged with (pairs that slid off their "
             "target by more than 'Margin' dropped, new contacts paired), instead of pairing every sample afresh; "
-            "after a failed attempt the detection is fresh. Off by default: BCN_Epileptic's clip took 838 Newton "
-            "iterations instead of 1,211 over steps 16-40, then stopped at step 41 (docs/performance.md)");
+            "after a failed attempt the detection is fresh. Off by default: BCN_Epileptic's clip took 1,575 Newton "
+            "iterations instead of 1,997, but stopped at step 39 (or 41) in other runs (docs/performance.md)");
     v.entry("Maximum rounds", rounds, 10,
             "solves per step: after each, new contacts are paired and the tractions of points still behind a surface "
             "by more than a tenth of the thickness are raised (augmented Lagrangian); a step ends when nothing changes",
