@@ -254,7 +254,9 @@ class Skeleton {
   static RestSkin rest_skin(const RigFile& rig, const RigClip* rest_clip, double rest_time);
   static JointSegments weighted_segments(const RigFile& rig, const std::vector<Affine>& rest, const RestSkin& skin, double h,
                                          const SkeletonParameters& p, const std::string& where);
-  static std::vector<std::vector<int>> region_nodes(const Mesh& mesh, const JointSegments& s);
+  // The lattice nodes each joint holds; with h > 0 (the cell size) a node one cell from another joint's
+  // region is held by neither.
+  static std::vector<std::vector<int>> region_nodes(const Mesh& mesh, const JointSegments& s, double h);
   std::vector<std::vector<Rigid>> sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate);
   std::vector<std::vector<std::pair<int, double>>> skin_weights(const Mesh& mesh, const RestSkin& skin) const;
   struct Bone {
