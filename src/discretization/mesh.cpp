@@ -78,7 +78,6 @@ Pattern make_pattern(const MeshSpec& s) {
   return p;
 }
 
-
 }  // namespace
 
 Mesh build_mesh(const MeshSpec& spec, const Teuchos::Comm<int>& comm) {

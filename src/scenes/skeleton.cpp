@@ -178,13 +178,12 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   cell_ = h;
   // Which joints hold flesh, and where: from the skin's weights (the default) or a capsule per joint.
   const RestSkin skin = rest_skin(rig, rest_clip, p.rest_time);
-  const JointSegments segments = p.bone_regions == SkeletonParameters::BoneRegions::Capsules
-                                     ? capsule_segments(rig, rest, p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h)
-                                     : weighted_segments(rig, rest, skin, h, p, where);
+  const bool capsules = p.bone_regions == SkeletonParameters::BoneRegions::Capsules;
+  const JointSegments segments = capsules ? capsule_segments(rig, rest, p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h)
+                                          : weighted_segments(rig, rest, skin, h, p, where);
   if (segments.joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
   // (Capsules, the user's 'Bone radius', hold every node within their radius as asked.)
-  std::vector<std::vector<int>> nodes =
-      region_nodes(mesh, segments, p.bone_regions == SkeletonParameters::BoneRegions::Capsules ? 0.0 : h);
+  std::vector<std::vector<int>> nodes = region_nodes(mesh, segments, capsules ? 0.0 : h);
   std::vector<std::vector<Rigid>> frames = sample_frames(segments, rest, p.sample_rate);
   // Joints whose region holds no node anywhere (a finger thinner than the cells) are no bones.
   std::vector<long long> count(segments.joints.size());
@@ -207,7 +206,6 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     report.bone = segments.candidate[j] && count[j] > 0;
     if (segments.candidate[j] && count[j] == 0) {
       char buf[200];
-      const bool capsules = p.bone_regions == SkeletonParameters::BoneRegions::Capsules;
       std::snprintf(buf, sizeof buf, "too thin for the lattice: its region (radius %.3g m) holds no node of the %.3g m cells%s",
                     segments.radius[j], h, capsules ? "" : " more than a cell from another bone's");
       report.why = buf;
@@ -421,19 +419,20 @@ std::vector<std::vector<int>> Skeleton::region_nodes(const Mesh& mesh, const Joi
   // between bones, 0 inverted at every frame, 191 Newton iterations instead of 195). A function of the
   // rest position alone (the neighbours are probed where the lattice puts them), so every rank decides
   // the same for a node it shares.
+  auto next_to_other = [&](const double X[3], int bone) {
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k) {
+          const double Y[3] = {X[0] + i * h, X[1] + j * h, X[2] + k * h};
+          const int other = assign(Y);
+          if (other >= 0 && other != bone) return true;
+        }
+    return false;
+  };
   for (std::size_t n = 0; n < mesh.local_nodes(); ++n) {
     const double X[3] = {Xh(n, 0), Xh(n, 1), Xh(n, 2)};
     const int best = assign(X);
-    if (best < 0) continue;
-    bool next_to_other = false;
-    for (int i = -1; i <= 1 && h > 0.0 && !next_to_other; ++i)
-      for (int j2 = -1; j2 <= 1 && !next_to_other; ++j2)
-        for (int k = -1; k <= 1 && !next_to_other; ++k) {
-          const double Y[3] = {X[0] + i * h, X[1] + j2 * h, X[2] + k * h};
-          const int o = assign(Y);
-          next_to_other = o >= 0 && o != best;
-        }
-    if (!next_to_other) nodes[best].push_back(static_cast<int>(n));
+    if (best >= 0 && !(h > 0.0 && next_to_other(X, best))) nodes[best].push_back(static_cast<int>(n));
   }
   return nodes;
 }
