@@ -12,6 +12,7 @@
 #include <sinew/scenes/scene.hpp>
 
 #include <Kokkos_Core.hpp>
+#include <Tpetra_Core.hpp>
 #include <Tpetra_Vector.hpp>
 
 #include <gtest/gtest.h>
@@ -549,6 +550,54 @@ TEST(RigScene, BonesComeFromTheSkinWeightsAndLeaveTheFleshAroundEachJointFree) {
   EXPECT_LT(bone_error(sim, rig, rig.pose(nullptr, 0.0), rig.pose(&rig.clips[0], 0.1), moved), 1e-9);
   std::printf("[ info ] bones from the skin weights: %d of 54 joints (%d nodes checked in their cylinders); listing:\n%s", bones,
               checked_nodes, skeleton.joint_listing().c_str());
+}
+
+// Two bones' regions side by side, a cell apart: one gives way, so that one free layer of nodes lies
+// between their held nodes. The smaller region (by its nodes, `sizes`) frees its nodes next to the other's
+// and the larger keeps all of its own; with no sizes, the later joint gives way. (When both gave way, a
+// bar two cells thick held little of its flesh and inverted in its dynamic run.)
+TEST(RigScene, WhereTwoBonesMeetTheSmallerRegionGivesWay) {
+  MeshSpec spec;
+  spec.cells = {8, 6, 2};
+  spec.upper = {8.0, 6.0, 2.0};
+  const Mesh mesh = build_mesh(spec, *Tpetra::getDefaultComm());
+  Skeleton::JointSegments s;
+  s.joints = {0, 1};
+  s.a = {{{1.0, 1.5, 1.0}}, {{1.0, 3.5, 1.0}}};
+  s.b = {{{7.0, 1.5, 1.0}}, {{7.0, 3.5, 1.0}}};
+  s.radius = {1.2, 0.9};  // joint 0 takes three layers in z, joint 1 one
+  s.gap = {0.0, 0.0};
+  s.capped = {0, 0};
+  s.candidate = {1, 1};
+  s.why = {"", ""};
+  s.dominated = {1, 1};
+  const auto whole = Skeleton::region_nodes(mesh, s, 0.0);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  auto next_to = [&](int n, const std::vector<int>& region) {
+    for (int m : region) {
+      double d = 0.0;
+      for (int i = 0; i < 3; ++i) d = std::max(d, std::fabs(X(n, i) - X(m, i)));
+      if (d < 1.5) return true;
+    }
+    return false;
+  };
+  // The expected split: `keeper` keeps its region, the other frees what lies next to it.
+  auto expect_split = [&](const std::vector<std::vector<int>>& held, int keeper, const char* what) {
+    const int other = 1 - keeper;
+    EXPECT_EQ(held[keeper], whole[keeper]) << what;
+    std::vector<int> expect;
+    for (int n : whole[other])
+      if (!next_to(n, whole[keeper])) expect.push_back(n);
+    EXPECT_EQ(held[other], expect) << what;
+    EXPECT_LT(held[other].size(), whole[other].size()) << what << ": nothing was next to the other bone";
+    EXPECT_FALSE(held[other].empty()) << what;
+  };
+  ASSERT_FALSE(whole[0].empty());
+  ASSERT_FALSE(whole[1].empty());
+  const std::vector<long long> sizes{3, 1}, swapped{1, 3};
+  expect_split(Skeleton::region_nodes(mesh, s, 1.0, &sizes), 0, "joint 1 is smaller");
+  expect_split(Skeleton::region_nodes(mesh, s, 1.0, &swapped), 1, "joint 0 is smaller");
+  expect_split(Skeleton::region_nodes(mesh, s, 1.0), 0, "no sizes: the later joint gives way");
 }
 
 TEST(RigScene, AJointThatIsNoneOfTheRigsIsNamed) {

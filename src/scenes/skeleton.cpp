@@ -182,15 +182,25 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
   const JointSegments segments = capsules ? capsule_segments(rig, rest, p.bone_radius > 0.0 ? p.bone_radius : 1.5 * h)
                                           : weighted_segments(rig, rest, skin, h, p, where);
   if (segments.joints.empty()) throw InputError(where + ": " + p.rig + " has no joint that moves skin");
+  const std::size_t J = segments.joints.size();
+  auto owned_counts = [&](const std::vector<std::vector<int>>& of) {
+    std::vector<long long> count(J);
+    for (std::size_t j = 0; j < J; ++j)
+      for (int n : of[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
+    MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(J), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
+    return count;
+  };
+  std::vector<std::vector<int>> nodes = region_nodes(mesh, segments, 0.0);
+  const std::vector<long long> region = owned_counts(nodes);
+  std::vector<long long> count = region;
   // (Capsules, the user's 'Bone radius', hold every node within their radius as asked.)
-  std::vector<std::vector<int>> nodes = region_nodes(mesh, segments, capsules ? 0.0 : h);
+  if (!capsules) {
+    nodes = region_nodes(mesh, segments, h, &region);
+    count = owned_counts(nodes);
+  }
   std::vector<std::vector<Rigid>> frames = sample_frames(segments, rest, p.sample_rate);
   // Joints whose region holds no node anywhere (a finger thinner than the cells) are no bones.
-  std::vector<long long> count(segments.joints.size());
-  for (std::size_t j = 0; j < segments.joints.size(); ++j)
-    for (int n : nodes[j]) count[j] += static_cast<std::size_t>(n) < mesh.n_owned_nodes;
-  MPI_Allreduce(MPI_IN_PLACE, count.data(), static_cast<int>(count.size()), MPI_LONG_LONG, MPI_SUM, raw_comm(comm));
-  for (std::size_t j = 0; j < segments.joints.size(); ++j) {
+  for (std::size_t j = 0; j < J; ++j) {
     Joint report;
     report.name = rig.nodes[segments.joints[j]].name;
     report.why = segments.why[j];
@@ -206,8 +216,12 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     report.bone = segments.candidate[j] && count[j] > 0;
     if (segments.candidate[j] && count[j] == 0) {
       char buf[200];
-      std::snprintf(buf, sizeof buf, "too thin for the lattice: its region (radius %.3g m) holds no node of the %.3g m cells%s",
-                    segments.radius[j], h, capsules ? "" : " more than a cell from another bone's");
+      if (region[j] > 0)
+        std::snprintf(buf, sizeof buf, "too small beside another bone: its region's %lld node%s within a cell of a larger "
+                      "bone's, and the flesh between bones is left free", region[j], region[j] == 1 ? " lies" : "s lie");
+      else
+        std::snprintf(buf, sizeof buf, "too thin for the lattice: its region (radius %.3g m) holds no node of the %.3g m cells",
+                      segments.radius[j], h);
       report.why = buf;
     }
     joints_.push_back(report);
@@ -372,7 +386,8 @@ Skeleton::JointSegments Skeleton::weighted_segments(const RigFile& rig, const st
   return s;
 }
 
-std::vector<std::vector<int>> Skeleton::region_nodes(const Mesh& mesh, const JointSegments& s, double h) {
+std::vector<std::vector<int>> Skeleton::region_nodes(const Mesh& mesh, const JointSegments& s, double h,
+                                                     const std::vector<long long>* sizes) {
   // Each node to the joint whose region holds it most deeply (distance over radius): production rigs'
   // regions overlap.
   auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
@@ -411,21 +426,29 @@ std::vector<std::vector<int>> Skeleton::region_nodes(const Mesh& mesh, const Joi
     }
     return best;
   };
-  // A node next to another bone's region (one cell away along the lattice, diagonals included) is held
-  // by neither: the gaps at a bone's ends free the flesh along a chain, but two bones whose regions meet
-  // side by side held neighbouring nodes, and the cell between them was crushed when one turned past the
-  // other (Testwuson's run: 21 inverted points at load steps 17-20, all in one cell whose three nodes
-  // moved with one bone and whose far face turned 6-8 cm past them with another; with a free layer
-  // between bones, 0 inverted at every frame, 191 Newton iterations instead of 195). A function of the
+  // No two bones hold nodes of one cell (one cell away along the lattice, diagonals included): the gaps
+  // at a bone's ends free the flesh along a chain, but two bones whose regions meet side by side held
+  // neighbouring nodes, and the cell between them was crushed when one turned past the other
+  // (Testwuson's run: 21 inverted points at load steps 17-20, all in one cell whose three nodes moved
+  // with one bone and whose far face turned 6-8 cm past them with another; with a free layer between
+  // bones, 0 inverted at every frame, 191 Newton iterations instead of 195). One side of each meeting
+  // gives way, the smaller region (else the later joint), so that one free node lies between two bones'
+  // held ones: where both gave way, the FBX bar (two cells thick) went from 0 to 2 inverted points in its
+  // dynamic run; where the larger gave way, to 4 (its Bone.006, one node, pulled the flesh around it as a
+  // point load); the smaller, 0, and Wuson's run 0 and 1 as with both. A function of the
   // rest position alone (the neighbours are probed where the lattice puts them), so every rank decides
   // the same for a node it shares.
+  auto yields_to = [&](int bone, int other) {
+    const long long a = sizes ? (*sizes)[bone] : 0, b = sizes ? (*sizes)[other] : 0;
+    return a != b ? a < b : bone > other;
+  };
   auto next_to_other = [&](const double X[3], int bone) {
     for (int i = -1; i <= 1; ++i)
       for (int j = -1; j <= 1; ++j)
         for (int k = -1; k <= 1; ++k) {
           const double Y[3] = {X[0] + i * h, X[1] + j * h, X[2] + k * h};
           const int other = assign(Y);
-          if (other >= 0 && other != bone) return true;
+          if (other >= 0 && other != bone && yields_to(bone, other)) return true;
         }
     return false;
   };

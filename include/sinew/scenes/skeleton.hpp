@@ -229,14 +229,9 @@ class Skeleton {
   double rig_seconds(double load) const { return clip_t0_ + (clip_t1_ - clip_t0_) * load; }
   double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
 
- private:
-  // A rig's joints as bones, in named steps: the file and its clip (returns the rest pose's clip, or
-  // null for the bind pose), each joint's segment at rest, the lattice nodes of each joint's capsule,
-  // the clip sampled into rigid frames, the file's skinning weights per owned node.
-  void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
-  const RigClip* read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where);
   // Each joint's segment at rest (from its origin a to b) and the region of lattice nodes it holds: a
   // capsule of its radius about the segment, or (capped) a cylinder leaving 'gap' free at both ends.
+  // (Public for tests, as is region_nodes.)
   struct JointSegments {
     std::vector<int> joints;  // rig node indices
     std::vector<std::array<double, 3>> a, b;
@@ -245,6 +240,18 @@ class Skeleton {
     std::vector<std::string> why;
     std::vector<long long> dominated;
   };
+  // The lattice nodes each joint holds; with h > 0 (the cell size) a node one cell from another joint's
+  // region is held by one of them only: the one whose region is larger (`sizes`: nodes per joint with
+  // h = 0, the same on every rank), else the earlier joint.
+  static std::vector<std::vector<int>> region_nodes(const Mesh& mesh, const JointSegments& s, double h,
+                                                    const std::vector<long long>* sizes = nullptr);
+
+ private:
+  // A rig's joints as bones, in named steps: the file and its clip (returns the rest pose's clip, or
+  // null for the bind pose), each joint's segment at rest, the lattice nodes of each joint's capsule,
+  // the clip sampled into rigid frames, the file's skinning weights per owned node.
+  void bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, const Teuchos::Comm<int>& comm, const std::string& where);
+  const RigClip* read_rig_and_clip(const SkeletonParameters& p, const Teuchos::Comm<int>& comm, const std::string& where);
   static JointSegments capsule_segments(const RigFile& rig, const std::vector<Affine>& rest, double radius);
   // The skin at rest: its vertices and their (rig node, weight) pairs.
   struct RestSkin {
@@ -254,9 +261,6 @@ class Skeleton {
   static RestSkin rest_skin(const RigFile& rig, const RigClip* rest_clip, double rest_time);
   static JointSegments weighted_segments(const RigFile& rig, const std::vector<Affine>& rest, const RestSkin& skin, double h,
                                          const SkeletonParameters& p, const std::string& where);
-  // The lattice nodes each joint holds; with h > 0 (the cell size) a node one cell from another joint's
-  // region is held by neither.
-  static std::vector<std::vector<int>> region_nodes(const Mesh& mesh, const JointSegments& s, double h);
   std::vector<std::vector<Rigid>> sample_frames(const JointSegments& s, const std::vector<Affine>& rest, double sample_rate);
   std::vector<std::vector<std::pair<int, double>>> skin_weights(const Mesh& mesh, const RestSkin& skin) const;
   struct Bone {
