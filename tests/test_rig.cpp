@@ -744,6 +744,63 @@ TEST(RigScene, ARunUpCarriesTheBonesFromTheRestPoseToTheClipsStart) {
               scene.run_up_steps(), largest * 180.0 / M_PI, halfway, sim.records().at(0).solve.newton_iterations);
 }
 
+TEST(RigScene, TheBonesPeakSpeedIsTheFastestHeldNodeBetweenSamples) {
+  // What a dynamic rig run prints beside the flesh's shear-wave speed: the fastest a held node moves
+  // between consecutive samples of the motion, and the largest second difference. Recomputed here from
+  // the bones' public transforms; a motion twice as long halves the speed and quarters the acceleration.
+  const std::string xml = rig_scene("rig_speed", 0.04, R"x(<Parameter name="Clip start" type="double" value="1.0"/>
+    <Parameter name="Clip end" type="double" value="1.5"/>)x",
+                                     R"x(<ParameterList name="Output"><Parameter name="HDF5" type="bool" value="false"/><Parameter name="Checkpoint every" type="int" value="0"/></ParameterList>)x");
+  Simulation sim(test::config(xml, "test_results/rig/speed"), RunOptions{true, ""});
+  Scene& scene = sim.scene();
+  scene.set_run_up(1.0);
+  const Skeleton& skeleton = scene.skeleton();
+  const Mesh& mesh = scene.system().mesh();
+  const auto& comm = *Tpetra::getDefaultComm();
+  const int samples = 12;
+  const double seconds = 0.5, dt = seconds / samples;
+  const Skeleton::PeakSpeed p = skeleton.peak_speed(mesh, comm, samples, seconds);
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  double speed = 0.0, acceleration = 0.0;
+  int at = 0;
+  std::string bone;
+  for (std::size_t b = 0; b < skeleton.size(); ++b)
+    for (int k = 1; k <= samples; ++k) {
+      const Rigid T0 = skeleton.transform(b, (k - 1.0) / samples), T1 = skeleton.transform(b, static_cast<double>(k) / samples);
+      const Rigid Tm = k >= 2 ? skeleton.transform(b, (k - 2.0) / samples) : T0;
+      for (int n : skeleton.nodes(b)) {
+        if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
+        const std::array<double, 3> x{X(n, 0), X(n, 1), X(n, 2)};
+        const auto a = T1.apply(x), b0 = T0.apply(x), c = Tm.apply(x);
+        double d = 0.0, dd = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          d += (a[i] - b0[i]) * (a[i] - b0[i]);
+          dd += (a[i] - 2.0 * b0[i] + c[i]) * (a[i] - 2.0 * b0[i] + c[i]);
+        }
+        if (std::sqrt(d) / dt > speed) {
+          speed = std::sqrt(d) / dt;
+          at = k;
+          bone = skeleton.name(b);
+        }
+        if (k >= 2) acceleration = std::max(acceleration, std::sqrt(dd) / (dt * dt));
+      }
+    }
+  MPI_Allreduce(MPI_IN_PLACE, &speed, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &acceleration, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_GT(speed, 0.1);  // the clip's half second moves the hands
+  EXPECT_NEAR(p.speed, speed, 1e-9 * speed);
+  EXPECT_NEAR(p.acceleration, acceleration, 1e-9 * acceleration);
+  if (comm.getSize() == 1) {
+    EXPECT_EQ(p.sample, at);
+    EXPECT_EQ(p.bone, bone);
+  }
+  const Skeleton::PeakSpeed slow = skeleton.peak_speed(mesh, comm, samples, 2.0 * seconds);
+  EXPECT_NEAR(slow.speed, 0.5 * p.speed, 1e-9 * p.speed);
+  EXPECT_NEAR(slow.acceleration, 0.25 * p.acceleration, 1e-9 * p.acceleration);
+  std::printf("[ info ] peak bone speed %.3g m/s ('%s', sample %d), acceleration %.3g m/s^2\n", p.speed, p.bone.c_str(), p.sample,
+              p.acceleration);
+}
+
 TEST(RigScene, TheFilesOwnSkinIsWrittenBesideTheSimulatedOne) {
   // lbs_NNNNNN.obj: the file's linear-blend skin at the clip's time of each step, with the topology of
   // the simulated skin_NNNNNN.obj (an artist loads either as a cache of the same mesh).

@@ -724,6 +724,52 @@ Rigid Skeleton::run_up_pose(std::size_t b, double s) const {
   return P;
 }
 
+Skeleton::PeakSpeed Skeleton::peak_speed(const Mesh& mesh, const Teuchos::Comm<int>& comm, int samples, double seconds) const {
+  PeakSpeed peak;
+  if (bones_.empty() || samples < 1 || !(seconds > 0.0)) return peak;
+  auto Xh = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mesh.X);
+  const double dt = seconds / samples;
+  double speed = 0.0;
+  int where[2] = {0, -1};  // the sample and the bone of this rank's fastest node
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    Rigid before = posed(b, 0.0), last = before;  // the poses at samples k - 2 and k - 1
+    for (int k = 1; k <= samples; ++k) {
+      const Rigid next = posed(b, static_cast<double>(k) / samples);
+      for (int n : bones_[b].nodes) {
+        if (static_cast<std::size_t>(n) >= mesh.n_owned_nodes) continue;
+        const std::array<double, 3> X{Xh(n, 0), Xh(n, 1), Xh(n, 2)};
+        const auto x2 = next.apply(X), x1 = last.apply(X), x0 = before.apply(X);
+        const double v = distance(x2, x1) / dt;
+        if (v > speed) {
+          speed = v;
+          where[0] = k;
+          where[1] = static_cast<int>(b);
+        }
+        if (k >= 2) {
+          double a2 = 0.0;
+          for (int i = 0; i < 3; ++i) a2 += (x2[i] - 2.0 * x1[i] + x0[i]) * (x2[i] - 2.0 * x1[i] + x0[i]);
+          peak.acceleration = std::max(peak.acceleration, std::sqrt(a2) / (dt * dt));
+        }
+      }
+      before = last;
+      last = next;
+    }
+  }
+  const MPI_Comm c = raw_comm(comm);
+  MPI_Allreduce(MPI_IN_PLACE, &peak.acceleration, 1, MPI_DOUBLE, MPI_MAX, c);
+  // The rank with the fastest node says where (bones are the same on every rank).
+  struct {
+    double speed;
+    int rank;
+  } mine{speed, comm.getRank()}, top{0.0, 0};
+  MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, c);
+  MPI_Bcast(where, 2, MPI_INT, top.rank, c);
+  peak.speed = top.speed;
+  peak.sample = where[0];
+  if (where[1] >= 0) peak.bone = bones_[static_cast<std::size_t>(where[1])].name;
+  return peak;
+}
+
 void Skeleton::plan_run_up(int steps) {
   // The largest rotation of a bone from rest to load 0 sets the automatic count: one step per 15 degrees
   // (at most 10); none when every bone starts at rest.

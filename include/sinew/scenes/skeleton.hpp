@@ -228,6 +228,17 @@ class Skeleton {
   // The clip's time, in seconds, at a load fraction (of the retargeted clip when retargeting).
   double rig_seconds(double load) const { return clip_t0_ + (clip_t1_ - clip_t0_) * load; }
   double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
+  // Collective. The fastest a held node moves between consecutive samples k/samples, k = 0..samples, of
+  // the motion (run-up excluded), when the whole motion takes `seconds`: the largest |T_b(t_k+1) X -
+  // T_b(t_k) X| / (seconds / samples) over bones b and their nodes X. Where it exceeds the flesh's
+  // shear-wave speed sqrt(mu / density), no material this soft can follow (a dynamic run's note).
+  struct PeakSpeed {
+    double speed = 0.0;  // m/s (length units per second)
+    int sample = 0;      // the sample k + 1 at whose end it was reached
+    double acceleration = 0.0;  // the largest second difference / dt^2
+    std::string bone;
+  };
+  PeakSpeed peak_speed(const Mesh& mesh, const Teuchos::Comm<int>& comm, int samples, double seconds) const;
 
   // Each joint's segment at rest (from its origin a to b) and the region of lattice nodes it holds: a
   // capsule of its radius about the segment, or (capped) a cylinder leaving 'gap' free at both ends.
