@@ -177,7 +177,7 @@ void Simulation::print_header() const {
   }
   if (bones.speed > 0.0) {
     // Flesh follows its bones by shear waves. Where the bones move faster than those travel, a layer of
-    // flesh lags behind however the solver does: FBX/huesitos.fbx (5.4 m tall, E = 2e4) has bones at
+    // flesh lags behind however the solver does: FBX/huesitos.fbx (5.4 m across, E = 2e4) has bones at
     // 29 m/s against waves at 2.6 m/s, and with inertia 139 inverted points by frame 4 (1,528 by frame
     // 21 without contact). Not a verdict: the FBX bar's bones reach 3.6 times its waves' speed and it
     // runs clean (docs/performance.md), so the numbers are printed for the user to weigh.
