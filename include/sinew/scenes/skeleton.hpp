@@ -230,8 +230,9 @@ class Skeleton {
   double retarget_scale() const { return retarget_ ? retarget_->scale() : 0.0; }
   // Collective. The fastest a held node moves between consecutive samples k/samples, k = 0..samples, of
   // the motion (run-up excluded), when the whole motion takes `seconds`: the largest |T_b(t_k+1) X -
-  // T_b(t_k) X| / (seconds / samples) over bones b and their nodes X. Where it exceeds the flesh's
-  // shear-wave speed sqrt(mu / density), no material this soft can follow (a dynamic run's note).
+  // T_b(t_k) X| / (seconds / samples) over bones b and their nodes X, and the largest second difference
+  // |x_k+1 - 2 x_k + x_k-1| / dt^2. A dynamic run prints both beside the flesh's shear-wave speed
+  // sqrt(mu / density): flesh cannot follow bones that outrun its waves (docs/performance.md).
   struct PeakSpeed {
     double speed = 0.0;  // m/s (length units per second)
     int sample = 0;      // the sample k + 1 at whose end it was reached
