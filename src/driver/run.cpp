@@ -156,10 +156,11 @@ void Simulation::set_initial(const Vector& u, const Vector* velocity) {
 void Simulation::print_header() const {
   const System& sys = scene_->system();
   const std::size_t prescribed = sys.global_fixed_dofs();  // collective: outside the rank-0 block
-  // A dynamic rig: do the bones outrun the flesh's shear waves? (collective)
+  // A dynamic rig: do the bones outrun the flesh's shear waves? (collective; only for a header that is
+  // printed: --quiet is the same on every rank)
   const TimeParameters& time = config_.params.time;
   Skeleton::PeakSpeed bones;
-  if (time.dynamic() && !config_.params.skeleton.rig.empty())
+  if (!opt_.quiet && time.dynamic() && !config_.params.skeleton.rig.empty())
     bones = scene_->skeleton().peak_speed(sys.mesh(), *comm_, time.steps(), time.end_time());
   if (!talk_) return;
   std::printf("Sinew: scene '%s' (%s), %s, %d MPI rank%s\n", scene_->name().c_str(), config_.file.c_str(),
