@@ -8,6 +8,7 @@
 #include "system_test_utils.hpp"
 
 #include <sinew/algebra/terms/contact.hpp>
+#include <sinew/algebra/terms/contact_barrier.hpp>
 #include <sinew/core/collective.hpp>
 #include <sinew/core/parameters.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
@@ -598,4 +599,206 @@ TEST(Contact, ARestartInsideAContactStepContinuesWithTheSameTractions) {
   const double d = rel_diff(gather(full.displacement()), gather(again.displacement()));
   EXPECT_LT(d, 1e-8);
   if (world()->getRank() == 0) std::printf("restarted inside step 3: final displacement %.2e (relative) from the uninterrupted run's\n", d);
+}
+
+// ---- barrier self contact (terms/contact_barrier.hpp) ----------------------------------------------
+
+// The squared distance from a point to a triangle's face, edge and corner, with the gradient and
+// Hessian the barrier uses, against central differences of the distance itself (each point placed where
+// that feature is the closest); and the feature test agrees with the closest point.
+TEST(BarrierContact, TheDistanceHasTheGradientAndHessianOfTheDistanceItself) {
+  const Vec a{0.1, -0.2, 0.05}, b{1.1, 0.1, -0.1}, c{0.3, 0.9, 0.2};
+  struct Case {
+    Vec p;
+    barrier::Feature::Kind kind;
+  };
+  const Case cases[] = {{{0.45, 0.25, 0.6}, barrier::Feature::Face},
+                        {{0.7, -0.6, 0.3}, barrier::Feature::Edge},
+                        {{-0.5, -0.7, 0.2}, barrier::Feature::Vertex}};
+  for (const Case& k : cases) {
+    const barrier::Feature f = barrier::closest_feature(k.p, a, b, c);
+    ASSERT_EQ(f.kind, k.kind);
+    const barrier::Distance2 D = barrier::distance2(k.p, a, b, c, f);
+    Vec x[4] = {k.p, a, b, c};
+    auto d2 = [&](const Vec* y) {
+      const double d = barrier::point_triangle_distance(y[0], y[1], y[2], y[3]);
+      return d * d;
+    };
+    EXPECT_NEAR(D.value, d2(x), 1e-14);
+    const double h = 1e-5;
+    double gmax = 0.0, herr = 0.0, hmax = 0.0, gerr = 0.0;
+    for (int i = 0; i < 12; ++i) {
+      Vec xp[4] = {x[0], x[1], x[2], x[3]}, xm[4] = {x[0], x[1], x[2], x[3]};
+      xp[i / 3][i % 3] += h;
+      xm[i / 3][i % 3] -= h;
+      gerr = std::max(gerr, std::fabs((d2(xp) - d2(xm)) / (2 * h) - D.grad[i]));
+      gmax = std::max(gmax, std::fabs(D.grad[i]));
+      // Column i of the Hessian: central differences of the formula's gradient.
+      const barrier::Distance2 Dp = barrier::distance2(xp[0], xp[1], xp[2], xp[3], f), Dm = barrier::distance2(xm[0], xm[1], xm[2], xm[3], f);
+      for (int j = 0; j < 12; ++j) {
+        herr = std::max(herr, std::fabs((Dp.grad[j] - Dm.grad[j]) / (2 * h) - D.hess[j * 12 + i]));
+        hmax = std::max(hmax, std::fabs(D.hess[j * 12 + i]));
+      }
+    }
+    EXPECT_GT(gmax, 0.1);
+    EXPECT_LT(gerr, 1e-8 * gmax) << "feature " << k.kind;
+    EXPECT_LT(herr, 1e-6 * hmax) << "feature " << k.kind;
+    // Translating everything changes nothing: the gradient's four blocks sum to zero.
+    for (int c3 = 0; c3 < 3; ++c3) EXPECT_NEAR(D.grad[c3] + D.grad[3 + c3] + D.grad[6 + c3] + D.grad[9 + c3], 0.0, 1e-12);
+  }
+}
+
+// b(D) = -(D - D^)^2 ln(D / D^): zero with its slope and curvature at D^ (the barrier switches on
+// smoothly), its derivatives those of its value, and unbounded as D -> 0; the projection leaves a
+// 12 x 12 Hessian PSD and a PSD one alone.
+TEST(BarrierContact, TheBarrierSwitchesOnSmoothlyAndGrowsWithoutBound) {
+  const double Dhat = 4e-4;
+  for (double D : {1e-6, 3e-5, 1e-4, 3.9e-4}) {
+    const barrier::Law l = barrier::law(D, Dhat), lp = barrier::law(D * (1 + 1e-6), Dhat), lm = barrier::law(D * (1 - 1e-6), Dhat);
+    EXPECT_GT(l.e, 0.0);
+    EXPECT_LT(l.d1, 0.0);
+    EXPECT_GT(l.d2, 0.0);
+    EXPECT_NEAR((lp.e - lm.e) / (2e-6 * D), l.d1, 1e-6 * std::fabs(l.d1));
+    EXPECT_NEAR((lp.d1 - lm.d1) / (2e-6 * D), l.d2, 1e-6 * std::fabs(l.d2));
+  }
+  const barrier::Law at = barrier::law(Dhat * (1 - 1e-6), Dhat);
+  EXPECT_LT(at.e, 1e-15);
+  EXPECT_LT(std::fabs(at.d1), 1e-9);
+  EXPECT_LT(at.d2, 1e-4);
+  EXPECT_EQ(barrier::law(Dhat, Dhat).e, 0.0);
+  EXPECT_GT(barrier::law(1e-30, Dhat).e, 3.5 * barrier::law(1e-10, Dhat).e);  // -ln D: 62 against 15
+  EXPECT_FALSE(std::isfinite(barrier::law(0.0, Dhat).e));
+
+  const Vec a{0.1, -0.2, 0.05}, b{1.1, 0.1, -0.1}, c{0.3, 0.9, 0.2}, p{-0.3, -0.4, 0.05};  // nearest a
+  const barrier::Distance2 D = barrier::distance2(p, a, b, c, barrier::closest_feature(p, a, b, c));
+  const barrier::Law l = barrier::law(D.value, 1.5 * D.value);
+  std::vector<std::vector<double>> H(12, std::vector<double>(12));
+  double Hp[144];
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j) Hp[i * 12 + j] = H[i][j] = l.d2 * D.grad[i] * D.grad[j] + l.d1 * D.hess[i * 12 + j];
+  EXPECT_LT(min_eigenvalue(H), -1e-3) << "the unprojected Hessian is indefinite here, or the test proves nothing";
+  barrier::project_psd(Hp);
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j) H[i][j] = Hp[i * 12 + j];
+  EXPECT_GT(min_eigenvalue(H), -1e-12 * max_abs(H));
+  double before[144];
+  std::copy(Hp, Hp + 144, before);
+  barrier::project_psd(Hp);
+  for (int k = 0; k < 144; ++k) EXPECT_NEAR(Hp[k], before[k], 1e-12 * max_abs(H));
+}
+
+// Additive CCD: a point moving straight through a triangle stops short of it (and still apart by at
+// least a tenth of where it started); one sliding past it above its plane, or moving away, is not
+// stopped; a triangle moving onto a still point is stopped as well.
+TEST(BarrierContact, ContinuousCollisionStopsAPointShortOfATriangle) {
+  const Vec a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0}, zero{0, 0, 0};
+  const Vec p{0.2, 0.2, 0.1}, through{0.05, 0.02, -0.3};  // crosses the plane at t = 1/3, inside the triangle
+  const double t = barrier::vertex_triangle_toi(p, a, b, c, through, zero, zero, zero, 1.0);
+  EXPECT_LT(t, 1.0 / 3.0);
+  EXPECT_GT(t, 0.25);  // not needlessly short: the crossing is at 1/3
+  const Vec at{p[0] + t * through[0], p[1] + t * through[1], p[2] + t * through[2]};
+  EXPECT_GE(barrier::point_triangle_distance(at, a, b, c), 0.1 * 0.1 * (1 - 1e-12));
+  EXPECT_EQ(barrier::vertex_triangle_toi(p, a, b, c, Vec{2.0, 1.0, 0.0}, zero, zero, zero, 1.0), 1.0);   // slides above
+  EXPECT_EQ(barrier::vertex_triangle_toi(p, a, b, c, Vec{0.0, 0.0, 1.0}, zero, zero, zero, 1.0), 1.0);   // leaves
+  const Vec up{0, 0, 0.5};  // the triangle rises through the point at t = 0.2
+  EXPECT_LT(barrier::vertex_triangle_toi(p, a, b, c, zero, up, up, up, 1.0), 0.2);
+  // Over a longer interval, the same crossing bounds it.
+  EXPECT_LT(barrier::vertex_triangle_toi(p, a, b, c, through, zero, zero, zero, 2.0), 1.0 / 3.0);
+}
+
+// The barrier term in a system: its gradient is that of its energy (central differences along random
+// directions, samples between the blocks closer than dhat), its Hessian PSD, its forces sum to zero;
+// and the step limit stops a step that would push the upper block's samples through the lower one.
+TEST(BarrierContact, TheTermHasTheGradientOfItsEnergyAndLimitsSteps) {
+  System sys(world(), two_blocks(), snh());
+  ContactSettings cs = block_springs(0.2);
+  cs.barrier = true;
+  cs.thickness = 0.15;  // the blocks are 0.1 apart at rest
+  auto contact = add_springs(sys, cs);
+  auto u = sys.create_vector();
+  press(sys, *u, 0.05);  // 0.05 apart, a wiggle of 0.004
+  contact->detect(*u);
+  sys.update_pattern();
+  EXPECT_GT(contact->global_pairs(), 20);
+  auto f = sys.create_vector();
+  const auto t = sys.evaluate(*u, f.get(), nullptr);
+  EXPECT_GT(t.share("contact"), 0.0);
+  EXPECT_GT(t.contacts, 10);
+  auto dir = sys.create_vector(), up = sys.create_vector(), um = sys.create_vector();
+  for (int trial = 0; trial < 3; ++trial) {
+    set_displacement(sys, *dir, [&](const std::array<double, 3>&, int c, long long gid) { return hash_unit(gid, c, 7 + trial); });
+    const double eps = 1e-6;
+    up->update(1.0, *u, eps, *dir, 0.0);
+    um->update(1.0, *u, -eps, *dir, 0.0);
+    const double slope = (sys.evaluate(*up, nullptr, nullptr).energy - sys.evaluate(*um, nullptr, nullptr).energy) / (2 * eps);
+    EXPECT_NEAR(slope, f->dot(*dir), 1e-6 * std::max(1.0, std::fabs(slope)));
+  }
+  const auto H = term_hessian(sys, *contact, *u);
+  EXPECT_GT(max_abs(H), 0.0);
+  EXPECT_GT(min_eigenvalue(H), -1e-10 * max_abs(H));
+  const auto fc = term_force(sys, *contact, *u);
+  double sum[3] = {0, 0, 0}, scale = 0.0;
+  for (std::size_t k = 0; k < fc.size(); ++k) {
+    sum[k % 3] += fc[k];
+    scale = std::max(scale, std::fabs(fc[k]));
+  }
+  for (double s : sum) EXPECT_LT(std::fabs(s), 1e-12 * fc.size() * scale);
+  // A step moving the upper block down by 0.1 more would cross at 1/2: it is limited short of that;
+  // one moving it up is not limited.
+  auto down = sys.create_vector();
+  set_displacement(sys, *down, [&](const std::array<double, 3>& X, int c, long long) { return c == 2 && X[2] > 1.05 ? -0.1 : 0.0; });
+  const double limit = sys.step_limit(*u, *down, 2.0);
+  EXPECT_LT(limit, 0.5);
+  EXPECT_GT(limit, 0.2);
+  down->scale(-1.0);
+  EXPECT_EQ(sys.step_limit(*u, *down, 2.0), 2.0);
+  // A first guess that takes the upper block 0.1 down (through the lower one's top) is pulled back
+  // where it crosses: the path to what is left is admitted, the lower block's samples away from the
+  // contact keep their guess, and the upper block's top (no surface point of the contact) too.
+  set_displacement(sys, *down, [&](const std::array<double, 3>& X, int c, long long) { return c == 2 && X[2] > 1.05 ? -0.1 : 0.0; });
+  auto guess = sys.create_vector();
+  guess->update(1.0, *u, 1.0, *down, 0.0);
+  const auto wanted = gather(*guess);
+  EXPECT_EQ(sys.admit_guess(*u, *guess), 1.0);  // the pull-back was local
+  auto path = sys.create_vector();
+  path->update(1.0, *guess, -1.0, *u, 0.0);
+  EXPECT_EQ(sys.step_limit(*u, *path, 1.0), 1.0);
+  const auto got = gather(*guess);
+  std::size_t kept = 0, pulled = 0;
+  for (std::size_t i = 2; i < got.size(); i += 3) (std::fabs(got[i] - wanted[i]) < 1e-15 ? kept : pulled) += 1;
+  EXPECT_GT(pulled, 10u);
+  EXPECT_GT(kept, pulled);
+}
+
+// The blocks pressed 0.3 into each other's place with the barrier: the run ends with no surface point
+// inside the other block and none closer than a tenth of dhat, the top's push carried to the bottom.
+TEST(BarrierContact, TwoBlocksPressedTogetherNeverTouch) {
+  Simulation sim(config(blocks_xml(0.4, true, 4, R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x"),
+                        "test_results/contact_blocks_barrier" + tag()),
+                 RunOptions{true, ""});
+  ASSERT_EQ(sim.run(), 0);
+  const auto& last = sim.records().back();
+  const ContactTerm& contact = *sim.scene().contact();
+  EXPECT_GT(last.totals.contacts, 20);
+  EXPECT_EQ(contact.step_counts().inside_depth, 0.0);
+  const double top = condition_force(sim, "top", 2), bottom = condition_force(sim, "bottom", 2);
+  EXPECT_LT(top, -100.0);
+  EXPECT_NEAR(bottom, -top, 1e-6 * std::fabs(top));
+  // Every pair's sample keeps its distance (the barrier's pairs on this rank).
+  const System& sys = sim.scene().system();
+  auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sys.mesh().X);
+  (void)X;
+  double closest = HUGE_VAL;
+  const auto& s = contact.surface();
+  const auto all = gather(sim.displacement());
+  for (const auto& p : contact.pairs()) {
+    Vec x[4];
+    for (int j = 0; j < 4; ++j) {
+      const int v = s.vertex_of(p.node[j]);
+      for (int k = 0; k < 3; ++k) x[j][k] = s.X[v][k] + all[3 * static_cast<std::size_t>(p.node[j]) + k];
+    }
+    closest = std::min(closest, barrier::point_triangle_distance(x[0], x[1], x[2], x[3]) / p.delta);
+  }
+  EXPECT_GT(closest, 0.01);
+  EXPECT_LT(closest, 1.0);  // and some pair pushes
 }

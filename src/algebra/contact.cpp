@@ -1,6 +1,7 @@
 // ContactTerm: collider distances, self-contact detection and the penalty energy (terms/contact.hpp).
 #include <sinew/algebra/system.hpp>
 #include <sinew/algebra/terms/contact.hpp>
+#include "contact_detection.hpp"
 #include <sinew/core/collective.hpp>
 #include <sinew/core/errors.hpp>
 
@@ -216,7 +217,7 @@ bool ContactTerm::allows_node_relaxation(std::vector<char>& held) const {
   for (const Pair& p : pairs_)
     for (int j = 0; j < 4; ++j)
       if (p.col[j] >= 0 && static_cast<std::size_t>(p.col[j] / 3) < held.size()) held[static_cast<std::size_t>(p.col[j] / 3)] = 1;
-  if (!colliders_.empty())
+  if (!colliders_.empty() || (settings_.self && settings_.barrier))  // (a barrier: any sample may come near any face)
     for (int n : owned_samples_) held[static_cast<std::size_t>(n)] = 1;
   return true;
 }
@@ -265,8 +266,10 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
   double energy = 0.0, penetration = 0.0;
   long long pressing = 0;
 
-  // Self-contact springs.
-  for (const Pair& p : pairs_) {
+  // Self contact: the barrier's pairs, or springs.
+  static const std::vector<Pair> none;
+  if (settings_.barrier) add_barrier(in, out, energy, pressing);
+  for (const Pair& p : settings_.barrier ? none : pairs_) {
     if (p.col[0] < 0 || p.col[1] < 0 || p.col[2] < 0 || p.col[3] < 0)
       throw std::logic_error("ContactTerm: a pair's node is not a column here (System::update_pattern not called)");
     double g = 0.0;
@@ -364,30 +367,6 @@ void ContactTerm::add(const TermInput& in, TermOutput& out) const {
 
 // ---- detection, in named steps ------------------------------------------------------------------------
 
-// The current positions a detection reads: of the local nodes (owned and ghost), and of every surface
-// vertex (replicated).
-struct ContactTerm::Positions {
-  Kokkos::View<double* [3]>::HostMirror X;
-  Vector overlap;
-  decltype(std::declval<Vector&>().getLocalViewHost(Tpetra::Access::ReadOnly)) uh;
-  std::vector<Vec> surface;
-  Positions(const System& system, const Vector& u)
-      : X(Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), system.mesh().X)), overlap(system.overlap_dofs()) {
-    overlap.doImport(u, Import(system.owned_dofs(), system.overlap_dofs()), Tpetra::INSERT);
-    uh = overlap.getLocalViewHost(Tpetra::Access::ReadOnly);
-  }
-  Vec node(int n) const { return Vec{X(n, 0) + uh(3 * n, 0), X(n, 1) + uh(3 * n + 1, 0), X(n, 2) + uh(3 * n + 2, 0)}; }
-};
-
-// A pair a detection considers before choosing.
-struct ContactTerm::Candidate {
-  int vertex, kind;  // kind 0: inside (reference map), 1: kept from the last pass, 2: proximity
-  int triangle;
-  double beta[3], normal[3], d2;
-  int refined;
-  double lambda;
-};
-
 ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multipliers, double slide) {
   const auto t0 = std::chrono::steady_clock::now();
   ContactDetection stats;
@@ -405,6 +384,21 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
     return stats;
   }
   gather_surface(at);
+  ensure_tied();
+  if (settings_.barrier) {
+    stats.added = detect_barrier(at, last, stats);
+  } else {
+    detect_springs(at, last, keep, multipliers, slide, stats);
+  }
+  long long unpaired = stats.unpaired;
+  MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  double deepest = stats.deepest;
+  MPI_Allreduce(&deepest, &stats.deepest, 1, MPI_DOUBLE, MPI_MAX, comm);
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+void ContactTerm::ensure_tied() const {
   if (!tied_known_) {  // the attachments' nodes: they are set up after this term, before any detection
     std::vector<char> tied(surface_.vertices(), 0);
     bool any = false;
@@ -412,6 +406,11 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
     if (any) tied_ = std::move(tied);
     tied_known_ = true;
   }
+}
+
+void ContactTerm::detect_springs(const Positions& at, const std::vector<Chosen>& last, bool keep, bool multipliers, double slide,
+                                 ContactDetection& stats) {
+  const MPI_Comm comm = raw_comm(*system_.comm());
   // paired: 1 for a kept pair, 2 for one whose spring already sees its sample behind the target (the
   // inside test cannot tell it more).
   std::vector<char> paired(surface_.vertices(), 0);
@@ -427,15 +426,9 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
   all.insert(all.end(), kept.begin(), kept.end());
   const long long pressing_new = choose(std::move(all), stats);
   install();
-  long long unpaired = stats.unpaired;
-  MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  double deepest = stats.deepest;
-  MPI_Allreduce(&deepest, &stats.deepest, 1, MPI_DOUBLE, MPI_MAX, comm);
   // What changes the energy at this state: a converged state stays converged under new pairs that do
   // not push yet (they wait in the pair set for the next solve).
   stats.added = pressing_new + stats.refrozen;
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return stats;
 }
 
 long long ContactTerm::update_collider_tractions(const Positions& at, bool keep) {

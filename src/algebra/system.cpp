@@ -262,6 +262,54 @@ bool System::linearisable() const {
   return std::all_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->linearisable(); });
 }
 
+bool System::limits_steps() const {
+  return std::any_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->limits_steps(); });
+}
+
+double System::step_limit(const Vector& u, const Vector& du, double t_max) const {
+  double t = t_max;
+  for (const auto& term : terms_)
+    if (term->limits_steps()) t = std::min(t, term->step_limit(u, du, t_max));
+  return t;
+}
+
+double System::admit_guess(const Vector& u, Vector& guess) const {
+  if (!limits_steps()) return 1.0;
+  // The terms' own pull-backs first, a few passes (a vertex pulled back can be met by a neighbour that
+  // was not), then the whole guess when the path still crosses.
+  auto d = create_vector();
+  double t = 1.0;
+  for (int pass = 0; pass < 4; ++pass) {
+    for (const auto& term : terms_)
+      if (term->limits_steps()) term->admit_guess(u, guess);
+    d->update(1.0, guess, -1.0, u, 0.0);
+    t = step_limit(u, *d, 1.0);
+    if (t >= 1.0) return 1.0;
+  }
+  // The free DOFs at 0.9 of the way; where the prescribed ones still cross on that path (a bone that
+  // holds surface nodes), the free ones at the last state: the least a guess can then do.
+  auto pulled = [&](double taken) {
+    auto out = create_vector();
+    out->assign(guess);
+    auto g = out->getLocalViewHost(Tpetra::Access::ReadWrite);
+    auto u0 = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+    std::vector<char> fixed(g.extent(0), 0);
+    for (int i : fixed_owned_) fixed[static_cast<std::size_t>(i)] = 1;
+    for (std::size_t i = 0; i < g.extent(0); ++i)
+      if (!fixed[i]) g(i, 0) = u0(i, 0) + taken * (g(i, 0) - u0(i, 0));
+    return out;
+  };
+  double taken = 0.9 * t;
+  auto candidate = pulled(taken);
+  d->update(1.0, *candidate, -1.0, u, 0.0);
+  if (step_limit(u, *d, 1.0) < 1.0) {
+    taken = 0.0;
+    candidate = pulled(taken);
+  }
+  guess.assign(*candidate);
+  return taken;
+}
+
 std::vector<std::string> System::log_columns() const {
   std::vector<std::string> c;
   for (const auto& term : terms_) {

@@ -218,6 +218,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     scene.system().begin_step(StepStart{at_.load, t, u_.get(), first_attempt && rec.cuts == 0});
     first_attempt = false;
     predicted = stepper_->begin(at_.load, t, *u_, *trial);
+    admit_guess(*trial);
     if (talk_) {
       const double now = wall_seconds(), done = at_.load - start_load_, elapsed = now - started_;
       // The pace of the last two steps, not of the whole run: steps grow as a motion creases the
@@ -305,6 +306,7 @@ Simulation::StepOutcome Simulation::run_up() {
     scene.set_run_up(s1);
     scene.system().begin_step(StepStart{0.0, 0.0, u_.get(), true});
     scene.apply_load(0.0, *trial);
+    admit_guess(*trial);
     if (talk_) {
       std::printf("run-up %d/%d  the bones %.3g of the way from the rest pose%s\n", ++step, R, s1, cuts ? "  (after a cut)" : "");
       std::fflush(stdout);
@@ -339,6 +341,16 @@ Simulation::StepOutcome Simulation::run_up() {
     ds *= 0.5;
   }
   return StepOutcome::Done;
+}
+
+void Simulation::admit_guess(Vector& trial) {
+  // A contact barrier admits no guess whose path from the last state passes a surface point through a
+  // face (System::admit_guess): the skinning guess of a crease is pulled back towards the last state.
+  const double taken = scene_->system().admit_guess(*u_, trial);
+  if (talk_ && taken < 1.0) {
+    std::printf("  first guess: %.3g of the way (the rest would pass the surface through itself)\n", taken);
+    std::fflush(stdout);
+  }
 }
 
 SolveReport Simulation::solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress,

@@ -216,6 +216,15 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
   // The largest fraction of inverted points at which nodes are relaxed.
   static constexpr double relax_tangle = 1e-3;
 
+  // The longest step along dir from x (at most t_max) that every term admits (System::step_limit).
+  bool limits_steps() const { return sys_.limits_steps(); }
+  double step_limit(const NOX::Abstract::Vector& x, const NOX::Abstract::Vector& dir, double t_max) const {
+    auto u = Extract::getConstTpetraVector(dynamic_cast<const NOX::Thyra::Vector&>(x).getThyraRCPVector());
+    auto d = Extract::getConstTpetraVector(dynamic_cast<const NOX::Thyra::Vector&>(dir).getThyraRCPVector());
+    const double t = sys_.step_limit(*u, *d, t_max);
+    return t;
+  }
+
   double energy(const Thyra::VectorBase<double>& x) const {
     const auto t0 = Clock::now();
     const double e = sys_.evaluate(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(x)), nullptr, nullptr).energy;
@@ -341,7 +350,10 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       grp.computeF();
       return retry;
     }
-    step = first_step_;
+    // A term that bounds the steps (a contact barrier: no surface point through a face) has the first
+    // trial, and any longer one, start no farther.
+    const double limit = model_.limits_steps() ? model_.step_limit(xold, dir, std::max(first_step_, max_step_)) : HUGE_VAL;
+    step = std::min(first_step_, limit);
     for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= reduction_) {
       grp.computeX(old, dir, step);
       grp.computeF();  // one assembly gives F and the energy (SolveState::last)
@@ -349,7 +361,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       if (!std::isfinite(E) || state.last.undefined > 0) continue;
       const double roundoff = 1e-11 * std::max({std::fabs(E0), std::fabs(E), model_.energy_scale()});
       if (E <= E0 + 1e-4 * step * slope || (std::fabs(E - E0) <= roundoff && grp.getNormF() < F0)) {
-        if (k == 0 && !(std::fabs(E - E0) <= roundoff)) step = extend(grp, old, dir, step, E0, slope, E);
+        if (k == 0 && !(std::fabs(E - E0) <= roundoff) && step < limit) step = extend(grp, old, dir, step, E0, slope, E, limit);
         state.policy.step_taken(step);
         model_.relax(grp, relax_share_);
         return true;
@@ -380,14 +392,14 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   // trials only past 1.5 steps: caps of 2, 4, 8 and 32 gave the scramble 222, 268, 365 and 387 Newton
   // iterations (long steps from a tangle undo too much), the other scenes alike.
   double extend(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir, double t1,
-                double E0, double slope, double E1) const {
+                double E0, double slope, double E1, double limit) const {
     const SolveState& state = model_.state();
     double best = t1, Ebest = E1, evaluated = t1;
     // Sliding off a saddle (HessianPolicy::saddle(), nothing inverted) the energy keeps falling along
     // the projected directions beyond any cap, and steps capped at 2 let the slide take 30 iterations of
     // growing residual on the corotational human's fourth step (10 at 4 times the cap; that step 92 -> 49
     // Newton iterations with this alone). Not near inverted points: there long steps undo too much.
-    const double cap = state.policy.saddle() && state.last.inverted == 0 ? saddle_factor * max_step_ : max_step_;
+    const double cap = std::min(limit, state.policy.saddle() && state.last.inverted == 0 ? saddle_factor * max_step_ : max_step_);
     for (int k = 0; k < max_extensions; ++k) {
       const double c = (Ebest - E0 - slope * best) / (best * best);
       const double next = std::min(cap, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);

@@ -168,6 +168,23 @@ class EnergyTerm {
     (void)held;
     return false;
   }
+  // A term whose energy is +inf past some surface (a contact barrier) bounds the steps along a
+  // direction: step_limit(u, du, t_max) is the largest t <= t_max such that u + s du is admissible for
+  // all s in [0, t] (owned DOFs; collective). The line search starts no longer, and a step's first
+  // guess is pulled back to it.
+  virtual bool limits_steps() const { return false; }
+  virtual double step_limit(const Vector& u, const Vector& du, double t_max) const {
+    (void)u;
+    (void)du;
+    return t_max;
+  }
+  // Such a term may first pull back only the part of a step's first guess whose path it does not admit
+  // (owned DOFs; Dirichlet ones left as they are; collective); System::admit_guess then checks the
+  // whole path again.
+  virtual void admit_guess(const Vector& u, Vector& guess) const {
+    (void)u;
+    (void)guess;
+  }
   // The tangent predictor linearises the total energy about the last state: a term set up at a state
   // (contact pairs found there) cannot be carried to a new one that way.
   virtual bool linearisable() const { return true; }

@@ -124,6 +124,14 @@ class System {
   // checkpoint lacks gets none and keeps its fresh state).
   std::vector<std::pair<std::string, TermState>> save_states() const;
   void load_states(const std::vector<std::pair<std::string, TermState>>& states);
+  // Some term bounds the steps (EnergyTerm::limits_steps), and the bound along du from u: the smallest
+  // of the terms' (t_max when none). Collective.
+  bool limits_steps() const;
+  double step_limit(const Vector& u, const Vector& du, double t_max) const;
+  // Pulls a step's first guess back towards u (owned DOFs) where some term bounds the path from u to
+  // it: the free DOFs to 0.9 of the admissible fraction, the Dirichlet ones left where the guess has
+  // them. Returns the fraction taken (1: the guess as it was). Collective.
+  double admit_guess(const Vector& u, Vector& guess) const;
   // The tangent predictor may linearise the energy (every term allows it).
   bool linearisable() const;
   // log.csv's term columns ("<term>_energy" and each term's own), and their values at a step's end.

@@ -73,6 +73,8 @@ struct ContactParameters {
   bool self = false;
   double stiffness = 0.0, thickness = 0.0, margin = 0.0;
   bool refine = true, smooth = false, keep = false;
+  enum class Model { Springs, Barrier };
+  Model model = Model::Springs;
   int rounds = 0;
   NamedSections<ColliderParameters> colliders;
 
@@ -88,6 +90,12 @@ struct ContactParameters {
     v.entry("Margin", margin, 0.0,
             "self contact: surface points this close to the surface are paired before they touch (0: thickness + h / 2)",
             Range::non_negative());
+    v.choice("Self contact model", model, Model::Springs,
+             Choices<Model>{{"springs", Model::Springs}, {"barrier", Model::Barrier}},
+             "springs: the paper's penalty springs on planes frozen at detection (Sec. 6); barrier: a log barrier "
+             "on each surface point's distance to the faces near it, which grows without bound as they touch, with "
+             "every Newton step cut short of a point passing through a face (after Li et al. 2020; 'Thickness' is "
+             "where it starts)");
     v.entry("Refine targets", refine, true,
             "self contact: move each target to the closest point of the deformed surface nearby (the paper's local "
             "optimization)");

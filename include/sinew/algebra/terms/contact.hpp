@@ -109,6 +109,10 @@ struct ContactSettings {
   int rounds = 10;         // at most this many detect-and-solve rounds per step (round())
   double onset = 0.0;      // the stretch over which a spring's stiffness ramps from 0 to k (0: sharp)
   bool keep = false;       // a step's first detection keeps the last converged state's springs (round())
+  // Self contact by a log barrier on the distance from each surface vertex to the triangles within
+  // `margin` (contact_barrier.hpp) instead of penalty springs: `thickness` is where the barrier starts
+  // (dhat), and every Newton step is cut short of any vertex passing through a triangle (step_limit).
+  bool barrier = false;
 };
 
 // What one detection pass found (global counts).
@@ -153,6 +157,14 @@ class ContactTerm final : public EnergyTerm {
   bool linearisable() const override { return false; }
   // Away from the springs' nodes (and, with colliders, the surface): the energy does not depend on them.
   bool allows_node_relaxation(std::vector<char>& held) const override;
+  // With the barrier: the largest step along du from u (at most t_max) after which no surface vertex has
+  // passed through a triangle (additive CCD over every vertex-triangle pair whose swept boxes meet).
+  bool limits_steps() const override { return settings_.self && settings_.barrier; }
+  double step_limit(const Vector& u, const Vector& du, double t_max) const override;
+  // The surface vertices whose path to the guess passes through a face (or a face through them), and
+  // the vertices of those faces, are pulled back to 0.9 of the pair's admissible fraction; the rest of
+  // the guess stays (a crease does not hold back the whole body's skinning guess).
+  void admit_guess(const Vector& u, Vector& guess) const override;
   std::vector<std::string> log_columns() const override;
   std::vector<double> log_values(const EvaluationTotals& totals) const override;
   std::vector<std::string> summary(const EvaluationTotals& totals) const override;
@@ -205,7 +217,7 @@ class ContactTerm final : public EnergyTerm {
     double X[4][3];    // reference positions of the four nodes
     double normal[3];  // outward normal of the target at detection
     double area;       // the sample's reference area
-    double delta;      // the thickness it is held at: the sample's clearance (clearance())
+    double delta;      // the thickness it is held at: the sample's clearance (clearance()); the barrier's dhat
     double lambda;     // augmented-Lagrangian traction (>= 0)
     int owner;         // the rank that owns the sample and counts the energy
     int col[4];        // column of each node's first DOF on this rank (-1: none)
@@ -237,6 +249,9 @@ class ContactTerm final : public EnergyTerm {
   struct Candidate;
   long long update_collider_tractions(const Positions& at, bool keep);
   void gather_surface(Positions& at) const;
+  void ensure_tied() const;  // tied_ from the system, at the first detection (or step limit)
+  void detect_springs(const Positions& at, const std::vector<Chosen>& last, bool keep, bool multipliers, double slide,
+                      ContactDetection& stats);
   bool excluded(int triangle, int vertex) const;  // the triangle touches the vertex's ring at rest
   std::vector<Candidate> kept_candidates(const Positions& at, const std::vector<Chosen>& previous, std::vector<char>& paired,
                                          bool multipliers, double slide, ContactDetection& stats) const;
@@ -248,6 +263,12 @@ class ContactTerm final : public EnergyTerm {
                             std::vector<Candidate>& found) const;
   long long choose(std::vector<Candidate> all, ContactDetection& stats);  // fills chosen_; returns new pushing pairs
   void install();  // pairs_ from chosen_
+  // The barrier's detection at `at`: every owned sample's triangles within the margin, gathered; the
+  // count of pairs nearer than their dhat that `last` lacked (contact_barrier.cpp).
+  long long detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats);
+  void add_barrier(const TermInput& in, TermOutput& out, double& energy, long long& pressing) const;
+  // The barrier's dhat for surface vertex v: the thickness, or half the vertex's clearance at rest.
+  double barrier_dhat(int v) const { return std::min(settings_.thickness, 0.5 * clearance_[v]); }
   void commit();
   std::vector<Chosen> committed_chosen_;
   std::vector<double> committed_collider_lambda_;
@@ -256,8 +277,8 @@ class ContactTerm final : public EnergyTerm {
   long long global_pairs_ = 0;
   int rank_ = 0;
   mutable std::vector<double> pressure_;
-  std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
-  bool tied_known_ = false;  // tied_ read from the system (at the first detection)
+  mutable std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
+  mutable bool tied_known_ = false;  // tied_ read from the system (at the first detection)
   std::vector<double> clearance_;
 };
 

@@ -1,0 +1,208 @@
+// ContactTerm's barrier self contact (ContactSettings::barrier): detection, energy and the step limit
+// (the math in terms/contact_barrier.hpp).
+#include <sinew/algebra/system.hpp>
+#include <sinew/algebra/terms/contact.hpp>
+#include <sinew/algebra/terms/contact_barrier.hpp>
+#include <sinew/core/collective.hpp>
+
+#include "contact_detection.hpp"
+
+#include <algorithm>
+#include <set>
+
+namespace sinew {
+
+using namespace geom;
+
+long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats) {
+  // Every owned sample with every triangle outside its ring within the margin: the pairs the energy
+  // sums over until the next detection (those farther than their dhat add nothing yet).
+  const auto& T = surface_.triangles;
+  const auto& x = at.surface;
+  std::vector<Box> tboxes(T.size());
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int m : T[t]) tboxes[t].add(x[m]);
+  const AabbTree triangle_tree(tboxes);
+  const double margin = settings_.margin;
+  std::vector<Candidate> found;
+  for (int v : sample_vertex_) {
+    if (!tied_.empty() && tied_[v]) continue;
+    triangle_tree.near(x[v], margin, [&](int t) {
+      if (excluded(t, v)) return;
+      double w[3];
+      const double d2 = distance2(x[v], closest_on_triangle(x[v], x[T[t][0]], x[T[t][1]], x[T[t][2]], w));
+      if (d2 >= margin * margin) return;
+      found.push_back({v, 2, t, {w[0], w[1], w[2]}, {0.0, 0.0, 0.0}, d2, 0, 0.0});
+    });
+  }
+  // The depth of samples inside the body (reported, as for the springs; none should be).
+  const std::vector<char> unpaired(surface_.vertices(), 0);
+  const std::vector<double> zero(surface_.vertices(), 0.0);
+  ContactDetection inside;
+  stats.inside = static_cast<long long>(inside_candidates(at, unpaired, zero, inside).size());
+  stats.deepest = inside.deepest;
+  long long in_total = 0;
+  MPI_Allreduce(&stats.inside, &in_total, 1, MPI_LONG_LONG, MPI_SUM, raw_comm(*system_.comm()));
+  stats.inside = in_total;
+
+  std::vector<Candidate> all = allgatherv(raw_comm(*system_.comm()), found);
+  std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {
+    return a.vertex != b.vertex ? a.vertex < b.vertex : a.triangle < b.triangle;
+  });
+  std::set<std::pair<int, int>> before;
+  for (const Chosen& c : last) before.emplace(c.vertex, c.triangle);
+  long long added = 0;
+  chosen_.clear();
+  for (const Candidate& c : all) {
+    const double dhat = barrier_dhat(c.vertex);
+    if (c.d2 < dhat * dhat && !before.count({c.vertex, c.triangle})) ++added;
+    chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {0.0, 0.0, 0.0}, 0.0});
+  }
+  stats.proximity = static_cast<long long>(chosen_.size());
+  install();
+  for (Pair& p : pairs_) p.delta = barrier_dhat(surface_.vertex_of(p.node[0]));
+  return added;
+}
+
+void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& energy, long long& pressing) const {
+  // E = kappa b(d^2), kappa = k A / dhat^2 (k the stiffness, a traction per length; A the sample's
+  // area): at half its dhat a pair pushes with 4.3 k A dhat, where a spring compressed by half the
+  // thickness pushes with k A dhat / 2. The Hessian kappa (b'' grad D grad D^T + b' hess D) is projected
+  // to PSD per pair (its 12 x 12 eigen-system).
+  const auto u = in.u;
+  const auto f = out.force;
+  const auto A = out.matrix;
+  const int owned_dofs = out.owned_dofs;
+  for (const Pair& p : pairs_) {
+    if (p.col[0] < 0 || p.col[1] < 0 || p.col[2] < 0 || p.col[3] < 0)
+      throw std::logic_error("ContactTerm: a pair's node is not a column here (System::update_pattern not called)");
+    const double dhat = p.delta;
+    if (!(dhat > 0.0)) continue;
+    Vec x[4];
+    for (int j = 0; j < 4; ++j)
+      for (int c = 0; c < 3; ++c) x[j][c] = p.X[j][c] + u(p.col[j] + c);
+    const double d = barrier::point_triangle_distance(x[0], x[1], x[2], x[3]);
+    if (!(d < dhat)) continue;
+    if (!(d > 0.0)) {  // touching: the energy is +inf there, a state no line search accepts
+      energy = HUGE_VAL;
+      continue;
+    }
+    const barrier::Distance2 D = barrier::distance2(x[0], x[1], x[2], x[3], barrier::closest_feature(x[0], x[1], x[2], x[3]));
+    const double Dhat = dhat * dhat, kappa = settings_.stiffness * p.area / Dhat;
+    const barrier::Law b = barrier::law(D.value, Dhat);
+    if (p.owner == rank_) {
+      energy += kappa * b.e;
+      ++pressing;
+      pressure_[p.col[0] / 3] += kappa * std::fabs(b.d1) * 2.0 * d / p.area;
+    }
+    double H[144];
+    if (in.want_matrix) {
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) H[i * 12 + j] = kappa * (b.d2 * D.grad[i] * D.grad[j] + b.d1 * D.hess[i * 12 + j]);
+      barrier::project_psd(H);
+    }
+    for (int j = 0; j < 4; ++j) {
+      if (p.col[j] >= owned_dofs) continue;  // not a row of this rank
+      for (int c = 0; c < 3; ++c) {
+        const int row = p.col[j] + c, i = 3 * j + c;
+        if (in.want_force) f(row) += kappa * b.d1 * D.grad[i];
+        if (in.want_matrix) {
+          int cols[12];
+          for (int l = 0; l < 4; ++l)
+            for (int e = 0; e < 3; ++e) cols[3 * l + e] = p.col[l] + e;
+          A.sumIntoValues(row, cols, 12, H + 12 * i, true, true);
+        }
+      }
+    }
+  }
+}
+
+namespace {
+// Calls fn(v, t, fraction) for every pair (owned sample v, triangle t) whose path from x0 to x1 the CCD
+// bounds below 1.
+template <class Excluded, class Fn>
+void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const std::vector<Vec>& x0, const std::vector<Vec>& x1,
+                   Excluded&& excluded, Fn&& fn) {
+  const auto& T = s.triangles;
+  std::vector<Box> swept(T.size());
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int m : T[t]) {
+      swept[t].add(x0[m]);
+      swept[t].add(x1[m]);
+    }
+  const AabbTree tree(swept);
+  for (int v : samples) {
+    if (excluded(-1, v)) continue;
+    Box b;
+    b.add(x0[v]);
+    b.add(x1[v]);
+    tree.descend([&](int id) { return !tree.node_box(id).overlaps(b); },
+                 [&](int t) {
+                   if (!swept[t].overlaps(b) || excluded(t, v)) return;
+                   const auto& tri = T[t];
+                   const double f = barrier::vertex_triangle_toi(x0[v], x0[tri[0]], x0[tri[1]], x0[tri[2]], x1[v] - x0[v],
+                                                                 x1[tri[0]] - x0[tri[0]], x1[tri[1]] - x0[tri[1]],
+                                                                 x1[tri[2]] - x0[tri[2]], 1.0);
+                   if (f < 1.0) fn(v, t, f);
+                 });
+  }
+}
+}  // namespace
+
+void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
+  if (!limits_steps()) return;
+  ensure_tied();
+  Positions at0(system_, u), at1(system_, guess);
+  gather_surface(at0);
+  gather_surface(at1);
+  std::vector<double> fraction(surface_.vertices(), 1.0);
+  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
+                [&](int t, int v) {
+                  if (t < 0) return (!tied_.empty() && tied_[v]) || !(barrier_dhat(v) > 0.0);
+                  return excluded(t, v);
+                },
+                [&](int v, int t, double f) {
+                  fraction[v] = std::min(fraction[v], 0.9 * f);
+                  for (int m : surface_.triangles[t]) fraction[m] = std::min(fraction[m], 0.9 * f);
+                });
+  std::vector<double> global(fraction.size());
+  MPI_Allreduce(fraction.data(), global.data(), static_cast<int>(fraction.size()), MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
+  std::vector<char> fixed(3 * system_.mesh().n_owned_nodes, 0);
+  for (int i : system_.fixed_owned_dofs()) fixed[static_cast<std::size_t>(i)] = 1;
+  auto g = guess.getLocalViewHost(Tpetra::Access::ReadWrite);
+  auto u0 = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+  for (std::size_t n = 0; n < system_.mesh().n_owned_nodes; ++n) {
+    const int v = surface_.vertex_of(system_.mesh().node_gid[n]);
+    if (v < 0 || global[v] >= 1.0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t i = 3 * n + c;
+      if (!fixed[i]) g(i, 0) = u0(i, 0) + global[v] * (g(i, 0) - u0(i, 0));
+    }
+  }
+}
+
+double ContactTerm::step_limit(const Vector& u, const Vector& du, double t_max) const {
+  if (!limits_steps()) return t_max;
+  // Positions at u and at u + t_max du (every surface vertex, replicated); each rank tests its own
+  // samples against every triangle whose swept box meets the sample's, and the smallest limit wins.
+  ensure_tied();
+  Positions at0(system_, u);
+  gather_surface(at0);
+  auto end = system_.create_vector();
+  end->update(1.0, u, t_max, du, 0.0);
+  Positions at1(system_, *end);
+  gather_surface(at1);
+  double limit = 1.0;
+  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
+                [&](int t, int v) {
+                  // (A sample touching a face at rest has no barrier, and no limit: it would hold every step at 0.)
+                  if (t < 0) return (!tied_.empty() && tied_[v]) || !(barrier_dhat(v) > 0.0);
+                  return excluded(t, v);
+                },
+                [&](int, int, double f) { limit = std::min(limit, f); });
+  double global = limit;
+  MPI_Allreduce(&limit, &global, 1, MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
+  return global * t_max;
+}
+
+}  // namespace sinew
