@@ -619,16 +619,13 @@ void ContactTerm::proximity_candidates(const Positions& at, const std::vector<ch
   // This rank's samples near the deformed surface, outside it.
   const auto& T = surface_.triangles;
   const auto& x = at.surface;
-  std::vector<Box> tboxes(T.size());
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int m : T[t]) tboxes[t].add(x[m]);
-  const AabbTree triangle_tree(tboxes);
+  const AabbTree near_tree = triangle_tree(surface_, x);
   const double margin = settings_.margin;
   for (int v : sample_vertex_) {
     if (paired[v]) continue;
     int best = -1;
     double best2 = margin * margin, bw[3] = {0, 0, 0};
-    triangle_tree.near(x[v], margin, [&](int t) {
+    near_tree.near(x[v], margin, [&](int t) {
       if (excluded(t, v)) return;
       double w[3];
       const Vec q = closest_on_triangle(x[v], x[T[t][0]], x[T[t][1]], x[T[t][2]], w);

@@ -19,15 +19,12 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
   // sums over until the next detection (those farther than their dhat add nothing yet).
   const auto& T = surface_.triangles;
   const auto& x = at.surface;
-  std::vector<Box> tboxes(T.size());
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int m : T[t]) tboxes[t].add(x[m]);
-  const AabbTree triangle_tree(tboxes);
+  const AabbTree near_tree = triangle_tree(surface_, x);
   const double margin = settings_.margin;
   std::vector<Candidate> found;
   for (int v : sample_vertex_) {
     if (!tied_.empty() && tied_[v]) continue;
-    triangle_tree.near(x[v], margin, [&](int t) {
+    near_tree.near(x[v], margin, [&](int t) {
       if (excluded(t, v)) return;
       double w[3];
       const double d2 = distance2(x[v], closest_on_triangle(x[v], x[T[t][0]], x[T[t][1]], x[T[t][2]], w));

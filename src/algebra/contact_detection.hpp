@@ -35,4 +35,12 @@ struct ContactTerm::Candidate {
   double lambda;
 };
 
+// A tree of the surface triangles' boxes at positions x.
+inline geom::AabbTree triangle_tree(const SurfaceMesh& s, const std::vector<Vec>& x) {
+  std::vector<geom::Box> boxes(s.triangles.size());
+  for (std::size_t t = 0; t < s.triangles.size(); ++t)
+    for (int m : s.triangles[t]) boxes[t].add(x[m]);
+  return geom::AabbTree(boxes);
+}
+
 }  // namespace sinew
