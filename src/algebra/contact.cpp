@@ -466,6 +466,13 @@ bool ContactTerm::excluded(int t, int v) const {
   // Attached surfaces (System::tie_nodes) are the attachment's: a tied sample, or a face of tied nodes.
   if (!tied_.empty() && (tied_[v] || (tied_[surface_.triangles[t][0]] && tied_[surface_.triangles[t][1]] && tied_[surface_.triangles[t][2]])))
     return true;
+  // The barrier pairs a vertex with every face but its own: a crease folding within two cells (which the
+  // springs, after the paper, leave alone) is held apart too, and a face is no nearer than about half
+  // a cell at rest on a lattice (the dhat a vertex gets is below its clearance wherever it is nearer).
+  if (settings_.barrier) {
+    const auto& T = surface_.triangles[t];
+    return T[0] == v || T[1] == v || T[2] == v;
+  }
   return surface_.touches_ring(t, v);
 }
 

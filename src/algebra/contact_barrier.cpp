@@ -15,7 +15,7 @@ namespace sinew {
 using namespace geom;
 
 long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats) {
-  // Every owned sample with every triangle outside its ring within the margin: the pairs the energy
+  // Every owned sample with every triangle but its own within the margin: the pairs the energy
   // sums over until the next detection (those farther than their dhat add nothing yet).
   const auto& T = surface_.triangles;
   const auto& x = at.surface;

@@ -252,7 +252,7 @@ class ContactTerm final : public EnergyTerm {
   void ensure_tied() const;  // tied_ from the system, at the first detection (or step limit)
   void detect_springs(const Positions& at, const std::vector<Chosen>& last, bool keep, bool multipliers, double slide,
                       ContactDetection& stats);
-  bool excluded(int triangle, int vertex) const;  // the triangle touches the vertex's ring at rest
+  bool excluded(int triangle, int vertex) const;  // springs: the triangle touches the vertex's ring at rest; barrier: it is one of the vertex's own
   std::vector<Candidate> kept_candidates(const Positions& at, const std::vector<Chosen>& previous, std::vector<char>& paired,
                                          bool multipliers, double slide, ContactDetection& stats) const;
   std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
