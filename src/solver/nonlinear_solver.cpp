@@ -221,8 +221,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
   double step_limit(const NOX::Abstract::Vector& x, const NOX::Abstract::Vector& dir, double t_max) const {
     auto u = Extract::getConstTpetraVector(dynamic_cast<const NOX::Thyra::Vector&>(x).getThyraRCPVector());
     auto d = Extract::getConstTpetraVector(dynamic_cast<const NOX::Thyra::Vector&>(dir).getThyraRCPVector());
-    const double t = sys_.step_limit(*u, *d, t_max);
-    return t;
+    return sys_.step_limit(*u, *d, t_max);
   }
 
   double energy(const Thyra::VectorBase<double>& x) const {
@@ -351,7 +350,8 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       return retry;
     }
     // A term that bounds the steps (a contact barrier: no surface point through a face) has the first
-    // trial, and any longer one, start no farther.
+    // trial, and any longer one, start no farther. (Looked up to the usual cap: with such a term, a
+    // saddle's longer steps stop there too.)
     const double limit = model_.limits_steps() ? model_.step_limit(xold, dir, std::max(first_step_, max_step_)) : HUGE_VAL;
     step = std::min(first_step_, limit);
     for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= reduction_) {
