@@ -781,6 +781,12 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
                 round + 1, global_pairs_, d.kept, d.inside, d.proximity, d.refined,
                 d.unpaired ? (", " + std::to_string(d.unpaired) + " unpaired").c_str() : "", d.raised, d.seconds);
   r.line = buf;
+  if (settings_.barrier && prescribed_samples_ > 0 && !prescribed_reported_) {
+    r.line += "\n  contact note: " + std::to_string(prescribed_samples_) +
+              " surface points are prescribed (bones, boundary conditions): they move outside the barrier's step limit "
+              "and can be carried through a face ('Bone attachment' soft keeps a skeleton's under it)";
+    prescribed_reported_ = true;
+  }
   return r;
 }
 

@@ -17,6 +17,13 @@ using namespace geom;
 long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats) {
   // Every owned sample with every triangle but its own within the margin: the pairs the energy
   // sums over until the next detection (those farther than their dhat add nothing yet).
+  if (prescribed_samples_ < 0) {  // counted once: the prescribed DOFs are set before any detection
+    std::vector<char> fixed(3 * system_.mesh().n_owned_nodes, 0);
+    for (int i : system_.fixed_owned_dofs()) fixed[static_cast<std::size_t>(i)] = 1;
+    long long mine = 0;
+    for (int n : owned_samples_) mine += fixed[3 * n] || fixed[3 * n + 1] || fixed[3 * n + 2];
+    MPI_Allreduce(&mine, &prescribed_samples_, 1, MPI_LONG_LONG, MPI_SUM, raw_comm(*system_.comm()));
+  }
   const auto& T = surface_.triangles;
   const auto& x = at.surface;
   const AabbTree near_tree = triangle_tree(surface_, x);

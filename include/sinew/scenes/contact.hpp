@@ -121,6 +121,13 @@ struct ContactParameters {
   void check(const Context& c) const {
     if (c.given("Margin") && margin > 0.0 && thickness > 0.0 && !(margin > thickness))
       c.fail("'Margin' must exceed 'Thickness'");
+    // The springs' own options say nothing to the barrier: a scene that sets them expects springs.
+    // ('Self contact' false with a model given is a comparison run with self contact switched off.)
+    if (model == Model::Barrier) {
+      for (const char* spring_only : {"Smooth onset", "Keep springs across steps", "Refine targets"})
+        if (c.given(spring_only))
+          c.fail(std::string("'") + spring_only + "' applies to 'Self contact model' springs only");
+    }
   }
 };
 

@@ -280,6 +280,8 @@ class ContactTerm final : public EnergyTerm {
   mutable std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
   mutable bool tied_known_ = false;  // tied_ read from the system (at the first detection)
   std::vector<double> clearance_;
+  long long prescribed_samples_ = -1;  // the barrier's: surface points with a prescribed DOF (-1: not counted yet)
+  bool prescribed_reported_ = false;
 };
 
 }  // namespace sinew
