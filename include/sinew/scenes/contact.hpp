@@ -95,7 +95,7 @@ struct ContactParameters {
              "springs: the paper's penalty springs on planes frozen at detection (Sec. 6); barrier: a log barrier "
              "on each surface point's distance to the faces near it, which grows without bound as they touch, with "
              "every Newton step cut short of a point passing through a face (after Li et al. 2020; 'Thickness' is "
-             "where it starts)");
+             "where it starts; experimental: use it with Skeleton/'Bone attachment' soft, docs/contact.md)");
     v.entry("Refine targets", refine, true,
             "self contact: move each target to the closest point of the deformed surface nearby (the paper's local "
             "optimization)");
