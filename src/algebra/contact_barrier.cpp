@@ -18,8 +18,7 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
   // Every owned sample with every triangle but its own within the margin: the pairs the energy
   // sums over until the next detection (those farther than their dhat add nothing yet).
   if (prescribed_samples_ < 0) {  // counted once: the prescribed DOFs are set before any detection
-    std::vector<char> fixed(3 * system_.mesh().n_owned_nodes, 0);
-    for (int i : system_.fixed_owned_dofs()) fixed[static_cast<std::size_t>(i)] = 1;
+    const std::vector<char> fixed = system_.fixed_owned_mask();
     long long mine = 0;
     for (int n : owned_samples_) mine += fixed[3 * n] || fixed[3 * n + 1] || fixed[3 * n + 2];
     MPI_Allreduce(&mine, &prescribed_samples_, 1, MPI_LONG_LONG, MPI_SUM, raw_comm(*system_.comm()));
@@ -123,10 +122,10 @@ void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& ener
 
 namespace {
 // Calls fn(v, t, fraction) for every pair (owned sample v, triangle t) whose path from x0 to x1 the CCD
-// bounds below 1.
-template <class Excluded, class Fn>
+// bounds below 1, skipping samples (t = -1) and pairs `skips` names.
+template <class Skips, class Fn>
 void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const std::vector<Vec>& x0, const std::vector<Vec>& x1,
-                   Excluded&& excluded, Fn&& fn) {
+                   Skips&& skips, Fn&& fn) {
   const auto& T = s.triangles;
   std::vector<Box> swept(T.size());
   for (std::size_t t = 0; t < T.size(); ++t)
@@ -136,13 +135,13 @@ void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const 
     }
   const AabbTree tree(swept);
   for (int v : samples) {
-    if (excluded(-1, v)) continue;
+    if (skips(-1, v)) continue;
     Box b;
     b.add(x0[v]);
     b.add(x1[v]);
     tree.descend([&](int id) { return !tree.node_box(id).overlaps(b); },
                  [&](int t) {
-                   if (!swept[t].overlaps(b) || excluded(t, v)) return;
+                   if (!swept[t].overlaps(b) || skips(t, v)) return;
                    const auto& tri = T[t];
                    const double f = barrier::vertex_triangle_toi(x0[v], x0[tri[0]], x0[tri[1]], x0[tri[2]], x1[v] - x0[v],
                                                                  x1[tri[0]] - x0[tri[0]], x1[tri[1]] - x0[tri[1]],
@@ -153,6 +152,13 @@ void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const 
 }
 }  // namespace
 
+bool ContactTerm::ccd_skips(int t, int v) const {
+  // t < 0: the sample itself. A tied one is the attachment's; one touching a face at rest has no
+  // barrier, and no limit either (it would hold every step at 0).
+  if (t < 0) return (!tied_.empty() && tied_[v]) || !(barrier_dhat(v) > 0.0);
+  return excluded(t, v);
+}
+
 void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
   if (!limits_steps()) return;
   ensure_tied();
@@ -161,18 +167,14 @@ void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
   gather_surface(at1);
   std::vector<double> fraction(surface_.vertices(), 1.0);
   limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
-                [&](int t, int v) {
-                  if (t < 0) return (!tied_.empty() && tied_[v]) || !(barrier_dhat(v) > 0.0);
-                  return excluded(t, v);
-                },
+                [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int v, int t, double f) {
                   fraction[v] = std::min(fraction[v], 0.9 * f);
                   for (int m : surface_.triangles[t]) fraction[m] = std::min(fraction[m], 0.9 * f);
                 });
   std::vector<double> global(fraction.size());
   MPI_Allreduce(fraction.data(), global.data(), static_cast<int>(fraction.size()), MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
-  std::vector<char> fixed(3 * system_.mesh().n_owned_nodes, 0);
-  for (int i : system_.fixed_owned_dofs()) fixed[static_cast<std::size_t>(i)] = 1;
+  const std::vector<char> fixed = system_.fixed_owned_mask();
   auto g = guess.getLocalViewHost(Tpetra::Access::ReadWrite);
   auto u0 = u.getLocalViewHost(Tpetra::Access::ReadOnly);
   for (std::size_t n = 0; n < system_.mesh().n_owned_nodes; ++n) {
@@ -198,11 +200,7 @@ double ContactTerm::step_limit(const Vector& u, const Vector& du, double t_max) 
   gather_surface(at1);
   double limit = 1.0;
   limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
-                [&](int t, int v) {
-                  // (A sample touching a face at rest has no barrier, and no limit: it would hold every step at 0.)
-                  if (t < 0) return (!tied_.empty() && tied_[v]) || !(barrier_dhat(v) > 0.0);
-                  return excluded(t, v);
-                },
+                [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int, int, double f) { limit = std::min(limit, f); });
   double global = limit;
   MPI_Allreduce(&limit, &global, 1, MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));

@@ -288,13 +288,12 @@ double System::admit_guess(const Vector& u, Vector& guess) const {
   }
   // The free DOFs at 0.9 of the way; where the prescribed ones still cross on that path (a bone that
   // holds surface nodes), the free ones at the last state: the least a guess can then do.
+  const std::vector<char> fixed = fixed_owned_mask();
   auto pulled = [&](double taken) {
     auto out = create_vector();
     out->assign(guess);
     auto g = out->getLocalViewHost(Tpetra::Access::ReadWrite);
     auto u0 = u.getLocalViewHost(Tpetra::Access::ReadOnly);
-    std::vector<char> fixed(g.extent(0), 0);
-    for (int i : fixed_owned_) fixed[static_cast<std::size_t>(i)] = 1;
     for (std::size_t i = 0; i < g.extent(0); ++i)
       if (!fixed[i]) g(i, 0) = u0(i, 0) + taken * (g(i, 0) - u0(i, 0));
     return out;
@@ -447,6 +446,12 @@ void System::set_fixed_dofs(const std::vector<int>& overlap_dofs) {
     if (h(d)) fixed_owned_.push_back(d);
   Kokkos::deep_copy(fixed_, h);
   refresh_fixed_columns();
+}
+
+std::vector<char> System::fixed_owned_mask() const {
+  std::vector<char> mask(3 * mesh_.n_owned_nodes, 0);
+  for (int d : fixed_owned_) mask[static_cast<std::size_t>(d)] = 1;
+  return mask;
 }
 
 void System::refresh_fixed_columns() {

@@ -75,6 +75,8 @@ class System {
   // mark its ghost DOFs too, which it can: selections are functions of the node's reference position.
   void set_fixed_dofs(const std::vector<int>& overlap_dofs);
   const std::vector<int>& fixed_owned_dofs() const { return fixed_owned_; }
+  // Per owned DOF: 1 where it is prescribed.
+  std::vector<char> fixed_owned_mask() const;
   std::size_t global_fixed_dofs() const;
 
   // External loads (the external-force term): force per reference volume, and gravity (acceleration,

@@ -267,6 +267,8 @@ class ContactTerm final : public EnergyTerm {
   // count of pairs nearer than their dhat that `last` lacked (contact_barrier.cpp).
   long long detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats);
   void add_barrier(const TermInput& in, TermOutput& out, double& energy, long long& pressing) const;
+  // The pairs the barrier's CCD leaves out (t < 0: the sample v itself).
+  bool ccd_skips(int t, int v) const;
   // The barrier's dhat for surface vertex v: the thickness, or half the vertex's clearance at rest.
   double barrier_dhat(int v) const { return std::min(settings_.thickness, 0.5 * clearance_[v]); }
   void commit();

@@ -156,8 +156,8 @@ inline double point_triangle_distance(const geom::Vec& p, const geom::Vec& a, co
 }
 
 // Additive CCD (Li, Kaufman and Jiang 2021, Alg. 1) of a vertex p moving by dp against a triangle
-// (a, b, c) moving by (da, db, dc), linearly over t in [0, t_max]: the distance d(t) >= |d'| L, where L
-// bounds the relative motion, so each advance by (1 - s) d / L or less cannot pass through. Returns a t
+// (a, b, c) moving by (da, db, dc), linearly over t in [0, t_max]: the distance changes no faster than
+// L, a bound on the relative motion, so an advance by less than d / L cannot pass through. Returns a t
 // at which the distance is still at least `keep` times the distance at 0 (t_max when the motion never
 // comes that near), after at most `iterations` advances (then the t reached: conservative).
 inline double vertex_triangle_toi(const geom::Vec& p, const geom::Vec& a, const geom::Vec& b, const geom::Vec& c, const geom::Vec& dp,
