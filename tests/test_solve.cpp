@@ -671,6 +671,39 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
               capped.newton, free.newton, capped.longest, free.longest);
 }
 
+// Each Newton iteration reports its direction's largest entry (NewtonIterate::direction_max, the log's
+// |du|): on a small twist, nearly linear, the first direction is nearly the whole way (its largest entry
+// within 5% of the largest displacement solved for), and the steps times the reported entries bound the
+// displacement from above, as the max norm of a sum must (no node relaxation, which moves nodes off the
+// directions).
+TEST(Solve, EachIterationReportsHowFarItsNewtonDirectionGoes) {
+  SceneConfig c = config(twist_xml(0.05, 1, "hex8", R"x(<Parameter name="Node relaxation" type="double" value="0"/>)x"),
+                         "test_results/solve_du" + tag());
+  Scene scene(c.scene(), world());
+  NonlinearSolver solver(scene.system(), c.params.solver);
+  auto u = scene.system().create_vector();
+  u->putScalar(0.0);
+  scene.apply_load(1.0, *u);
+  const std::vector<double> start = gather(*u);
+  std::vector<NewtonIterate> its;
+  const SolveReport r = solver.solve(*u, [&](const NewtonIterate& it) { its.push_back(it); });
+  ASSERT_TRUE(r.converged()) << r.reason();
+  ASSERT_GE(its.size(), 2u);
+  ASSERT_EQ(r.relaxed_nodes, 0);
+  const std::vector<double> end = gather(*u);
+  double moved = 0.0;
+  for (std::size_t i = 0; i < end.size(); ++i) moved = std::max(moved, std::fabs(end[i] - start[i]));
+  double bound = 0.0;
+  for (const NewtonIterate& it : its) {
+    ASSERT_TRUE(std::isfinite(it.direction_max));
+    bound += it.step * it.direction_max;
+  }
+  EXPECT_GT(moved, 0.0);
+  EXPECT_NEAR(its[0].direction_max, moved, 0.05 * moved);
+  EXPECT_GE(bound, moved * (1.0 - 1e-12));
+  EXPECT_LT(its.back().direction_max, 1e-3 * its[0].direction_max);  // converged: the last direction is short
+}
+
 TEST(Solve, NoxBacktrackSettingsGovernTheEnergyLineSearch) {
   // A 3.14 rad twist at nu = 0.49 needs a half step in its first Newton iteration (measured). With
   // NOX's own "Backtrack" list allowing one trial only, the energy line search must fail there.

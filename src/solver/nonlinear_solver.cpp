@@ -28,6 +28,7 @@
 #include <Tpetra_Vector.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cstdlib>
 #include <cmath>
@@ -76,6 +77,9 @@ struct SolveState {
   // an exact Jacobian's linear tolerance is tightened to end the solve where it can (forcing.hpp).
   double threshold = 0.0, tolerance_floor = 0.0;
   long long relaxed_nodes = 0;  // nodes moved by kept relaxations (ElasticModel::relax)
+  // The running iteration's Newton direction, its largest entry (NewtonIterate); NaN where the line
+  // search is not Sinew's energy backtracking, which records it.
+  double direction_max = 0.0;
 };
 
 // The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
@@ -333,6 +337,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     const double E0 = model_.energy(xold.getThyraVector());
     const double slope = old.getF().innerProduct(dir);
     const double F0 = old.getNormF();
+    state.direction_max = dir.norm(NOX::Abstract::Vector::MaxNorm);
     // A direction from a kept preconditioner that failed (PreconditionerLag): redo it with an updated
     // one, from the same state, before anything else is decided about it.
     if (state.lag && state.lag->redo(slope < 0.0, F0)) {
@@ -450,6 +455,9 @@ class ProgressObserver : public NOX::Observer {
  public:
   ProgressObserver(std::function<void(const NewtonIterate&)> cb, std::function<bool()> interrupt, const ElasticModel& model)
       : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
+  void runPreIterate(const NOX::Solver::Generic&) override {
+    model_.state().direction_max = std::numeric_limits<double>::quiet_NaN();  // set by the energy line search
+  }
   void runPreLineSearch(const NOX::Solver::Generic& solver) override {
     // The direction's linear solve has just ended: tell the preconditioner's lag how it went.
     trace_memory("linear solve");
@@ -475,6 +483,7 @@ class ProgressObserver : public NOX::Observer {
     if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step, it.residual);
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     it.exact_hessian = model_.state().policy.last_exact();
+    it.direction_max = model_.state().direction_max;
     if (cb_) cb_(it);
     if (interrupt_ && interrupt_()) throw Interrupted();
   }
