@@ -30,6 +30,19 @@ namespace {
 auto world() { return Tpetra::getDefaultComm(); }
 std::string tag() { return "_np" + std::to_string(world()->getSize()) + "_t" + std::to_string(Kokkos::DefaultExecutionSpace::concurrency()); }
 
+// A scene, its solver, and the state at rest with the scene's full load applied (the prescribed DOFs
+// at their end values): what a one-solve test starts from.
+struct LoadedScene {
+  explicit LoadedScene(const SceneConfig& c)
+      : scene(c.scene(), world()), solver(scene.system(), c.params.solver), u(scene.system().create_vector()) {
+    u->putScalar(0.0);
+    scene.apply_load(1.0, *u);
+  }
+  Scene scene;
+  NonlinearSolver solver;
+  Teuchos::RCP<Vector> u;
+};
+
 // A 4^3 hex cube [-0.5, 0.5]^2 x [0, 1], bottom fixed, top rotated by `angle` about z in `steps` steps.
 std::string twist_xml(double angle, int steps, const std::string& element = "hex8", const std::string& extra_solver = "",
                       const std::string& material = "") {
@@ -328,12 +341,8 @@ TEST(Solve, AFailedSolveIsRetriedWithProjectionOnlyWhenTheExactHessianWasUsed) {
     // The counts are the Hessian policy's: no iteration redone for a kept preconditioner (on 2 ranks one
     // is, and the exact Hessian comes an iteration later).
     c.params.solver.update = SolverParameters::Update::EveryNewtonIteration;
-    Scene scene(c.scene(), world());
-    NonlinearSolver solver(scene.system(), c.params.solver);
-    auto u = scene.system().create_vector();
-    u->putScalar(0.0);
-    scene.apply_load(1.0, *u);
-    const SolveReport r = solver.solve(*u);
+    LoadedScene s(c);
+    const SolveReport r = s.solver.solve(*s.u);
     EXPECT_FALSE(r.converged()) << below;
     EXPECT_EQ(r.status, SolveStatus::MaxIterations) << below;
     EXPECT_EQ(r.newton_iterations, expected) << "Exact Hessian below " << below;
@@ -644,16 +653,12 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
     SceneConfig c = config(std::regex_replace(twist_xml(1.5708, 1, "hex8", entries),
                                               std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49),
                            "test_results/solve_extend" + tag());
-    Scene scene(c.scene(), world());
-    NonlinearSolver solver(scene.system(), c.params.solver);
-    auto u = scene.system().create_vector();
-    u->putScalar(0.0);
-    scene.apply_load(1.0, *u);
+    LoadedScene s(c);
     Path p;
-    const SolveReport r = solver.solve(*u, [&](const NewtonIterate& it) { p.longest = std::max(p.longest, it.step); });
+    const SolveReport r = s.solver.solve(*s.u, [&](const NewtonIterate& it) { p.longest = std::max(p.longest, it.step); });
     EXPECT_TRUE(r.converged()) << "Maximum step " << max_step << ": " << r.reason();
     p.newton = r.newton_iterations;
-    p.u = gather(*u);
+    p.u = gather(*s.u);
     return p;
   };
   // The minimum along these directions lies near 1.45 Newton steps: a cap of 1.3 binds, 4 does not.
@@ -679,18 +684,14 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
 TEST(Solve, EachIterationReportsHowFarItsNewtonDirectionGoes) {
   SceneConfig c = config(twist_xml(0.05, 1, "hex8", R"x(<Parameter name="Node relaxation" type="double" value="0"/>)x"),
                          "test_results/solve_du" + tag());
-  Scene scene(c.scene(), world());
-  NonlinearSolver solver(scene.system(), c.params.solver);
-  auto u = scene.system().create_vector();
-  u->putScalar(0.0);
-  scene.apply_load(1.0, *u);
-  const std::vector<double> start = gather(*u);
+  LoadedScene s(c);
+  const std::vector<double> start = gather(*s.u);
   std::vector<NewtonIterate> its;
-  const SolveReport r = solver.solve(*u, [&](const NewtonIterate& it) { its.push_back(it); });
+  const SolveReport r = s.solver.solve(*s.u, [&](const NewtonIterate& it) { its.push_back(it); });
   ASSERT_TRUE(r.converged()) << r.reason();
   ASSERT_GE(its.size(), 2u);
   ASSERT_EQ(r.relaxed_nodes, 0);
-  const std::vector<double> end = gather(*u);
+  const std::vector<double> end = gather(*s.u);
   double moved = 0.0;
   for (std::size_t i = 0; i < end.size(); ++i) moved = std::max(moved, std::fabs(end[i] - start[i]));
   double bound = 0.0;
@@ -715,12 +716,8 @@ TEST(Solve, NoxBacktrackSettingsGovernTheEnergyLineSearch) {
   };
   for (const bool limited : {false, true}) {
     SceneConfig c = config(xml(limited ? one_try : ""), "test_results/solve_bt" + tag());
-    Scene scene(c.scene(), world());
-    NonlinearSolver solver(scene.system(), c.params.solver);
-    auto u = scene.system().create_vector();
-    u->putScalar(0.0);
-    scene.apply_load(1.0, *u);
-    const SolveReport r = solver.solve(*u);
+    LoadedScene s(c);
+    const SolveReport r = s.solver.solve(*s.u);
     if (limited)
       EXPECT_EQ(r.status, SolveStatus::LineSearchFailed) << r.reason();
     else
