@@ -283,9 +283,10 @@ std::function<void(const NewtonIterate&)> Simulation::newton_progress(int step, 
     residuals.push_back(it.residual);
     out_->log_newton(step, t, it);
     if (!talk_) return;
-    char du[32] = "";
+    char du[32] = "", bound[32] = "";
     if (std::isfinite(it.direction_max)) std::snprintf(du, sizeof du, "  |du| %.2e", it.direction_max);
-    std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s%s\n", it.iteration, it.residual, it.linear_iterations, it.step, du,
+    if (std::isfinite(it.step_bound)) std::snprintf(bound, sizeof bound, " (bound %.3g)", it.step_bound);
+    std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s%s%s\n", it.iteration, it.residual, it.linear_iterations, it.step, bound, du,
                 it.exact_hessian ? "  (exact Hessian)" : "");
     std::fflush(stdout);
   };

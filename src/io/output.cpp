@@ -299,7 +299,7 @@ Output::Output(const OutputParameters& params, const System& system, const std::
       for (const std::string& c : system.log_columns()) header += "," + c;
       open_csv(log_, dir_ + "/log.csv", restart_step, header);
       open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
-               "step,load,iteration,residual,cg_iterations,step_length,exact_hessian,direction_max");
+               "step,load,iteration,residual,cg_iterations,step_length,exact_hessian,direction_max,step_bound");
     });
   } catch (const std::runtime_error& e) {
     if (dynamic_cast<const InputError*>(&e)) throw;
@@ -625,7 +625,7 @@ void Output::log_newton(int step, double load, const NewtonIterate& it) {
   if (!root_) return;
   newton_log_ << std::setprecision(10) << step << "," << load << "," << it.iteration << "," << it.residual << ","
               << it.linear_iterations << "," << it.step << "," << (it.exact_hessian ? 1 : 0) << "," << it.direction_max
-              << "\n";
+              << "," << it.step_bound << "\n";
   newton_log_.flush();
 }
 

@@ -80,6 +80,7 @@ struct SolveState {
   // The running iteration's Newton direction, its largest entry (NewtonIterate); NaN where the line
   // search is not Sinew's energy backtracking, which records it.
   double direction_max = 0.0;
+  double step_bound = HUGE_VAL;  // the running iteration's bound on its step (NewtonIterate::step_bound)
 };
 
 // The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
@@ -358,6 +359,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     // trial, and any longer one, start no farther. (Looked up to the usual cap: with such a term, a
     // saddle's longer steps stop there too.)
     const double limit = model_.limits_steps() ? model_.step_limit(xold, dir, std::max(first_step_, max_step_)) : HUGE_VAL;
+    if (limit < std::max(first_step_, max_step_)) state.step_bound = limit;
     step = std::min(first_step_, limit);
     for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= reduction_) {
       grp.computeX(old, dir, step);
@@ -457,6 +459,7 @@ class ProgressObserver : public NOX::Observer {
       : cb_(std::move(cb)), interrupt_(std::move(interrupt)), model_(model) {}
   void runPreIterate(const NOX::Solver::Generic&) override {
     model_.state().direction_max = std::numeric_limits<double>::quiet_NaN();  // set by the energy line search
+    model_.state().step_bound = HUGE_VAL;
   }
   void runPreLineSearch(const NOX::Solver::Generic& solver) override {
     // The direction's linear solve has just ended: tell the preconditioner's lag how it went.
@@ -484,6 +487,7 @@ class ProgressObserver : public NOX::Observer {
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     it.exact_hessian = model_.state().policy.last_exact();
     it.direction_max = model_.state().direction_max;
+    it.step_bound = model_.state().step_bound;
     if (cb_) cb_(it);
     if (interrupt_ && interrupt_()) throw Interrupted();
   }

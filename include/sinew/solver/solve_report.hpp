@@ -2,6 +2,8 @@
 // counts and the time split the log and the performance suite read.
 #pragma once
 
+#include <cmath>
+
 #include <string>
 
 namespace sinew {
@@ -28,6 +30,11 @@ struct NewtonIterate {
   // stays large says Newton is still travelling (a crawl or a slide), one that shrinks says it is close.
   // NaN where unknown (a line search other than the energy backtracking).
   double direction_max = 0.0;
+  // The longest step along that direction a term allowed (a contact barrier's continuous collision
+  // test: no surface point through a face), where it was shorter than the longest step the line
+  // search tries ('Maximum step'); +inf where nothing bounded it. A step at its bound was cut short by
+  // contact, not by the energy.
+  double step_bound = HUGE_VAL;
 };
 
 struct SolveReport {
