@@ -32,6 +32,26 @@ inline double max_diff(const std::vector<double>& a, const std::vector<double>& 
   return m;
 }
 
+// The cells of one column of a CSV file with a header row (a run's log.csv or newton.csv), row by row;
+// empty when the file or the column is missing.
+inline std::vector<std::string> csv_column(const std::string& path, const std::string& name) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
+  const auto at = std::find(header.begin(), header.end(), name) - header.begin();
+  std::vector<std::string> out;
+  if (at == static_cast<long>(header.size())) return out;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string cell;
+    for (long k = 0; std::getline(ss, cell, ','); ++k)
+      if (k == at) out.push_back(cell);
+  }
+  return out;
+}
+
 // max |a - b| / max |a|
 inline double rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
   return max_diff(a, b) / std::max(max_abs(a), 1e-300);

@@ -236,28 +236,6 @@ TEST(Attachments, AFixedAttachmentAcrossAGapTurnsItsOffsetWithTheTarget) {
   EXPECT_LT(worst, 1e-8 * 2.1);  // 2.1: the reach of the upper block's top from the axis
 }
 
-namespace {
-
-// A log.csv column, row by row.
-std::vector<std::string> log_column(const std::string& dir, const std::string& name) {
-  std::ifstream in(dir + "/log.csv");
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
-  const auto at = std::find(header.begin(), header.end(), name) - header.begin();
-  std::vector<std::string> out;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    for (long k = 0; std::getline(ss, cell, ','); ++k)
-      if (k == at) out.push_back(cell);
-  }
-  return out;
-}
-
-}  // namespace
-
 // A run stopped after two of four steps and restarted from its checkpoint continues with the
 // attachment's pairs and tractions as they were, and ends in the uninterrupted run's state with its
 // tractions.
@@ -309,7 +287,7 @@ TEST(Attachments, ARestartContinuesWithTheTractions) {
   if (world()->getRank() == 0) {
     // Step 3's residual at its first guess holds the attachment's forces there: one the tractions are
     // missing from (a restart that lost them) is off by the tractions times the areas (~4 here).
-    const auto rw = log_column(whole_dir, "initial_residual"), rr = log_column(dir, "initial_residual");
+    const auto rw = csv_column(whole_dir + "/log.csv", "initial_residual"), rr = csv_column(dir + "/log.csv", "initial_residual");
     ASSERT_EQ(rw.size(), 4u);
     ASSERT_EQ(rr.size(), 4u);
     const double a3 = std::stod(rw[2]), b3 = std::stod(rr[2]);

@@ -24,7 +24,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 using namespace sinew;
 using namespace sinew::test;
@@ -772,8 +771,6 @@ TEST(BarrierContact, TheTermHasTheGradientOfItsEnergyAndLimitsSteps) {
   EXPECT_GT(kept, pulled);
 }
 
-// The blocks pressed 0.3 into each other's place with the barrier: the run ends with no surface point
-// inside the other block and none closer than a tenth of dhat, the top's push carried to the bottom.
 // Each Newton iteration's row of newton.csv reports the longest step the barrier's collision test
 // allowed along its direction (step_bound, +inf where it allowed the line search's longest): pressing
 // two blocks together, some directions would carry the top's faces through the bottom's, and their
@@ -783,37 +780,27 @@ TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllows) {
   Simulation sim(config(blocks_xml(0.4, true, 4, R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x"), dir),
                  RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
-  std::ifstream in(dir + "/newton.csv");
-  ASSERT_TRUE(in.good());
-  std::string line;
-  std::getline(in, line);
-  std::map<std::string, std::size_t> column;
-  {
-    std::istringstream h(line);
-    std::string name;
-    for (std::size_t i = 0; std::getline(h, name, ','); ++i) column[name] = i;
-  }
-  ASSERT_TRUE(column.count("step_length") && column.count("step_bound"));
-  int rows = 0, bounded = 0, at_bound = 0;
-  while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::istringstream r(line);
-    for (std::string x; std::getline(r, x, ',');) f.push_back(x);
-    ASSERT_GT(f.size(), column["step_bound"]);
-    const double step = std::stod(f[column["step_length"]]), bound = std::stod(f[column["step_bound"]]);
-    ++rows;
+  const std::vector<std::string> steps = csv_column(dir + "/newton.csv", "step_length"),
+                                 bounds = csv_column(dir + "/newton.csv", "step_bound");
+  ASSERT_EQ(steps.size(), bounds.size());
+  int bounded = 0, at_bound = 0;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const double step = std::stod(steps[i]), bound = std::stod(bounds[i]);
     if (std::isinf(bound)) continue;
     ++bounded;
     EXPECT_GT(bound, 0.0);
-    EXPECT_LE(step, bound * (1.0 + 1e-12)) << "row " << rows;
+    EXPECT_LE(step, bound * (1.0 + 1e-12)) << "row " << i + 1;
     at_bound += step == bound;
   }
-  EXPECT_GT(rows, 4);
+  EXPECT_GT(steps.size(), 4u);
   EXPECT_GT(bounded, 0);
   EXPECT_GT(at_bound, 0);
-  std::printf("  %d Newton iterations, %d bounded by the collision test, %d of them stepped to the bound\n", rows, bounded, at_bound);
+  std::printf("  %zu Newton iterations, %d bounded by the collision test, %d of them stepped to the bound\n", steps.size(), bounded,
+              at_bound);
 }
 
+// The blocks pressed 0.3 into each other's place with the barrier: the run ends with no surface point
+// inside the other block and none closer than a tenth of dhat, the top's push carried to the bottom.
 TEST(BarrierContact, TwoBlocksPressedTogetherNeverTouch) {
   Simulation sim(config(blocks_xml(0.4, true, 4, R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x"),
                         "test_results/contact_blocks_barrier" + tag()),

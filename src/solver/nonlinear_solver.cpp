@@ -358,8 +358,9 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     // A term that bounds the steps (a contact barrier: no surface point through a face) has the first
     // trial, and any longer one, start no farther. (Looked up to the usual cap: with such a term, a
     // saddle's longer steps stop there too.)
-    const double limit = model_.limits_steps() ? model_.step_limit(xold, dir, std::max(first_step_, max_step_)) : HUGE_VAL;
-    if (limit < std::max(first_step_, max_step_)) state.step_bound = limit;
+    const double longest = std::max(first_step_, max_step_);
+    const double limit = model_.limits_steps() ? model_.step_limit(xold, dir, longest) : HUGE_VAL;
+    if (limit < longest) state.step_bound = limit;
     step = std::min(first_step_, limit);
     for (int k = 0; k < max_iters_ && step >= min_step_; ++k, step *= reduction_) {
       grp.computeX(old, dir, step);
