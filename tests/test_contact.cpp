@@ -29,6 +29,7 @@ using namespace sinew;
 using namespace sinew::test;
 using geom::Vec;
 using geom::operator-;
+using geom::operator+;
 
 namespace {
 
@@ -310,6 +311,45 @@ TEST(Contact, AStepKeepsItsLastStatesSpringsOnlyWhenAskedAndNotAfterAFailure) {
     sys.abandon_step();  // that attempt failed: the cut one pairs afresh
     const System::Round cut = sys.round(*u, 0);
     EXPECT_NE(cut.lines[0].find("(0 kept"), std::string::npos) << cut.lines[0];
+  }
+}
+
+// A surface point can lie inside an element that has folded over itself (tets of it turned inside
+// out, its sound tets bulging past the surface) without going through any face; the detection tells it
+// apart from one pressed through a face, which is penetration. Here the top corner of a cell of the
+// lower block (at (0.75, 0.5, 1)) is pulled back over the cell's other top corner and a little up:
+// two of its six tets turn inside out and two bulge above the top face. The upper block is moved so
+// that a corner of its bottom sits in that bulge, in no sound element: one point inside, folded, no
+// penetration. The blocks pressed into each other (the upper's bottom through the lower's top face):
+// penetration, none folded. Springs and barrier alike (the report does not depend on the model).
+TEST(Contact, APointInsideAnElementFoldedOverItselfIsNotPenetration) {
+  const double h = 0.25;  // two_blocks' cells
+  const Vec cell{0.5, 0.25, 0.75}, corner = cell + Vec{h, h, h}, pulled = cell + Vec{-0.5 * h, h, 1.2 * h};
+  const Vec shift = (cell + Vec{-0.45 * h, 0.95 * h, 1.15 * h}) - Vec{0.0, 0.5, 1.1};  // the upper's (0, 0.5, 1.1) into the bulge
+  for (bool barrier : {false, true}) {
+    SCOPED_TRACE(barrier ? "barrier" : "springs");
+    System sys(world(), two_blocks(), snh());
+    ContactSettings cs = block_springs(0.2);
+    cs.barrier = barrier;
+    auto contact = add_springs(sys, cs);
+    auto u = sys.create_vector();
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) {
+      if (std::fabs(X[0] - corner[0]) + std::fabs(X[1] - corner[1]) + std::fabs(X[2] - corner[2]) < 1e-9) return (pulled - corner)[c];
+      return X[2] > 1.05 ? shift[c] : 0.0;
+    });
+    const ContactDetection fold = contact->detect(*u);
+    EXPECT_EQ(fold.inside, 1);
+    EXPECT_EQ(fold.folded, 1);
+    EXPECT_GT(fold.deepest, 0.0);
+    EXPECT_EQ(fold.crossed, 0);
+    EXPECT_EQ(fold.crossed_deepest, 0.0);
+    press(sys, *u, 0.13);
+    const ContactDetection pressed = contact->detect(*u);
+    EXPECT_GT(pressed.inside, 10);
+    EXPECT_EQ(pressed.folded, 0);
+    EXPECT_EQ(pressed.crossed, pressed.inside);
+    EXPECT_GT(pressed.crossed_deepest, 0.02);
+    EXPECT_EQ(pressed.crossed_deepest, pressed.deepest);
   }
 }
 

@@ -509,6 +509,27 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
   return kept;
 }
 
+namespace {
+
+// Whether local element e has a tet (its own, or one of a hex's six Kuhn tets) whose volume has another
+// sign than at rest.
+template <class Positions, class Conn>
+bool element_folded(const Positions& at, const Conn& conn, int e, bool hex) {
+  const int ntets = hex ? 6 : 1;
+  for (int k = 0; k < ntets; ++k) {
+    Vec x[4], X[4];
+    for (int a = 0; a < 4; ++a) {
+      const int n = conn(e, hex ? kHexTets[k][a] : a);
+      x[a] = at.node(n);
+      X[a] = {at.X(n, 0), at.X(n, 1), at.X(n, 2)};
+    }
+    if (!(tet_volume6(x[0], x[1], x[2], x[3]) * tet_volume6(X[0], X[1], X[2], X[3]) > 0.0)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positions& at, const std::vector<char>& paired,
                                                                    const std::vector<double>& carried,
                                                                    ContactDetection& stats) const {
@@ -524,26 +545,31 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     for (int a = 0; a < npe; ++a) eboxes[e].add(at.node(conn(e, a)));
   const AabbTree element_tree(eboxes);
   std::vector<Candidate> found;
+  std::vector<std::array<double, 3>> report;  // per sample inside: vertex, folded (0/1), depth
   // Every sample, kept pairs included: a kept spring whose target has slid away while its sample went
   // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
     if (paired[v] == 2 || (!tied_.empty() && tied_[v])) continue;
-    bool inside = false;
+    bool inside = false, in_sound = false;  // in some element; in one not folded over itself
     Vec Xref{};
     element_tree.at_point(x[v], [&](int e) {
-      if (inside) return;
+      if (in_sound) return;
       for (int a = 0; a < npe; ++a)
         if (surface_.in_ring(static_cast<int>(v), mesh.node_gid[conn(e, a)])) return;
       const int ntets = hex ? 6 : 1;
-      for (int k = 0; k < ntets && !inside; ++k) {
+      for (int k = 0; k < ntets; ++k) {
         int nodes[4];
         for (int a = 0; a < 4; ++a) nodes[a] = conn(e, hex ? kHexTets[k][a] : a);
         double l[4];
         if (!tet_barycentric(x[v], at.node(nodes[0]), at.node(nodes[1]), at.node(nodes[2]), at.node(nodes[3]), l)) continue;
         if (l[0] < -1e-12 || l[1] < -1e-12 || l[2] < -1e-12 || l[3] < -1e-12) continue;
-        inside = true;
-        Xref = {0.0, 0.0, 0.0};
-        for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{at.X(nodes[a], 0), at.X(nodes[a], 1), at.X(nodes[a], 2)};
+        in_sound = !element_folded(at, conn, e, hex);
+        if (!inside) {
+          inside = true;
+          Xref = {0.0, 0.0, 0.0};
+          for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{at.X(nodes[a], 0), at.X(nodes[a], 1), at.X(nodes[a], 2)};
+        }
+        break;
       }
     });
     if (!inside) continue;
@@ -588,6 +614,34 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;
     found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined, carried[v]});
     stats.deepest = std::max(stats.deepest, std::sqrt(d2));
+    // Told apart for the report only (the pair is made either way): a sample that lies only in elements
+    // with a tet turned inside out went through no face. Such an element has folded over itself and its
+    // sound tets bulge past the surface around the sample (BCN's knee with the barrier: a hex folded at
+    // a corner whose quadrature points all stay positive held a sample 0.7 mm in front of the nearest
+    // face, inside its dhat, reported 7.3 mm deep). A point pushed through a face lies in the sound
+    // elements behind it.
+    report.push_back({static_cast<double>(v), in_sound ? 1.0 : 0.0, std::sqrt(d2)});
+  }
+  // Per sample over all ranks (each holds its own elements): through a face where some rank found it
+  // in a sound element, folded otherwise.
+  std::vector<std::array<double, 3>> all = allgatherv(raw_comm(*system_.comm()), report);
+  std::sort(all.begin(), all.end());
+  std::vector<std::array<double, 3>> per_sample;
+  for (const auto& r : all) {
+    if (per_sample.empty() || per_sample.back()[0] != r[0]) {
+      per_sample.push_back(r);
+    } else {
+      per_sample.back()[1] = std::max(per_sample.back()[1], r[1]);
+      per_sample.back()[2] = std::max(per_sample.back()[2], r[2]);
+    }
+  }
+  for (const auto& r : per_sample) {
+    if (r[1] == 0.0) {
+      ++stats.folded;
+    } else {
+      ++stats.crossed;
+      stats.crossed_deepest = std::max(stats.crossed_deepest, r[2]);
+    }
   }
   return found;
 }
@@ -756,6 +810,8 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   step_.seconds += d.seconds;
   step_.pairs = global_pairs_;
   step_.inside_depth = d.deepest;
+  step_.crossed_depth = d.crossed_deepest;
+  step_.inside_folded = d.folded;
   // The same pairs (sample, target triangle) as an earlier round of this step and no traction raised:
   // a solve already had these springs, so another would only go round the same cycle. (A sample stuck
   // in a crease re-entered as "inside" round after round, and two proximity pairs came and went in
@@ -871,20 +927,28 @@ void ContactTerm::load_state(const TermState& state) {
 }
 
 std::vector<std::string> ContactTerm::log_columns() const {
-  return {"contacts", "penetration", "contact_pairs", "contact_rounds", "seconds_contact", "inside_depth"};
+  return {"contacts", "penetration", "contact_pairs", "contact_rounds", "seconds_contact", "inside_depth", "crossed_depth",
+          "inside_folded"};
 }
 
 std::vector<double> ContactTerm::log_values(const EvaluationTotals& totals) const {
   return {static_cast<double>(totals.contacts), totals.penetration, static_cast<double>(step_.pairs),
-          static_cast<double>(step_.rounds), step_.seconds, step_.inside_depth};
+          static_cast<double>(step_.rounds), step_.seconds, step_.inside_depth, step_.crossed_depth,
+          static_cast<double>(step_.inside_folded)};
 }
 
 std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) const {
   if (totals.contacts == 0 && step_.pairs == 0) return {};
-  char buf[256];
+  char buf[320];
   std::snprintf(buf, sizeof buf, "contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g",
-                totals.contacts, totals.penetration, step_.inside_depth, totals.share(name()));
-  return {buf};
+                totals.contacts, totals.penetration, step_.crossed_depth, totals.share(name()));
+  std::string line = buf;
+  if (step_.inside_folded > 0) {
+    std::snprintf(buf, sizeof buf, "; %lld more surface points inside elements folded over themselves (%.3g deep, no face crossed)",
+                  step_.inside_folded, step_.inside_depth);
+    line += buf;
+  }
+  return {line};
 }
 
 std::vector<std::pair<std::string, int>> ContactTerm::node_field_names() const { return {{"contact_pressure", 1}}; }

@@ -42,11 +42,12 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
   const std::vector<char> unpaired(surface_.vertices(), 0);
   const std::vector<double> zero(surface_.vertices(), 0.0);
   ContactDetection inside;
-  stats.inside = static_cast<long long>(inside_candidates(at, unpaired, zero, inside).size());
+  inside_candidates(at, unpaired, zero, inside);
+  stats.inside = inside.folded + inside.crossed;
   stats.deepest = inside.deepest;
-  long long in_total = 0;
-  MPI_Allreduce(&stats.inside, &in_total, 1, MPI_LONG_LONG, MPI_SUM, raw_comm(*system_.comm()));
-  stats.inside = in_total;
+  stats.folded = inside.folded;
+  stats.crossed = inside.crossed;
+  stats.crossed_deepest = inside.crossed_deepest;
 
   std::vector<Candidate> all = allgatherv(raw_comm(*system_.comm()), found);
   std::sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) {

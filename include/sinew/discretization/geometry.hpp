@@ -82,6 +82,9 @@ inline double closest_on_segment(const Vec& p, const Vec& a, const Vec& b) {
   return std::clamp(dot(p - a, ab) / l2, 0.0, 1.0);
 }
 
+// Six times the signed volume of tetrahedron (a, b, c, d): positive when (b - a, c - a, d - a) is right-handed.
+inline double tet_volume6(const Vec& a, const Vec& b, const Vec& c, const Vec& d) { return dot(b - a, cross(c - a, d - a)); }
+
 // Barycentric coordinates of p in tetrahedron (a, b, c, d); false for a degenerate one.
 inline bool tet_barycentric(const Vec& p, const Vec& a, const Vec& b, const Vec& c, const Vec& d, double l[4]) {
   const Vec e1 = b - a, e2 = c - a, e3 = d - a, r = p - a;

@@ -126,6 +126,11 @@ struct ContactDetection {
   long long added = 0;      // new pairs that push at once (inside, or nearer than the thickness), and refrozen ones
   long long raised = 0;     // multipliers raised for samples still behind their target (keep mode)
   double deepest = 0.0;     // the largest distance from a sample inside the volume to the surface
+  // The samples inside, each counted once over all ranks: those inside only elements folded over
+  // themselves (a tet of each turned inside out: the sample went through no face), and the others, the
+  // points through a face, with the deepest of them (the penetration a report gives).
+  long long folded = 0, crossed = 0;
+  double crossed_deepest = 0.0;
   double seconds = 0.0;
 };
 
@@ -207,6 +212,8 @@ class ContactTerm final : public EnergyTerm {
     int rounds = 0;
     long long pairs = 0;
     double seconds = 0.0, inside_depth = 0.0;
+    double crossed_depth = 0.0;  // inside_depth without the samples inside folded elements (ContactDetection)
+    long long inside_folded = 0;
   };
   const StepCounts& step_counts() const { return step_; }
 
@@ -255,6 +262,8 @@ class ContactTerm final : public EnergyTerm {
   bool excluded(int triangle, int vertex) const;  // springs: the triangle touches the vertex's ring at rest; barrier: it is one of the vertex's own
   std::vector<Candidate> kept_candidates(const Positions& at, const std::vector<Chosen>& previous, std::vector<char>& paired,
                                          bool multipliers, double slide, ContactDetection& stats) const;
+  // Samples inside the deformed elements this rank owns; stats gets their count of those folded and
+  // the deepest of the others over all ranks (collective).
   std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
                                            const std::vector<double>& carried, ContactDetection& stats) const;
   // Moves target triangle t and weights w of sample v to the closest deformed-surface point nearby.
