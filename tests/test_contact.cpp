@@ -511,10 +511,12 @@ TEST(Contact, AHalfSpaceAndAMeshColliderPushBackAlike) {
 namespace {
 
 std::string blocks_xml(double push, bool self, int steps = 4, const std::string& contact_extra = "",
-                       const std::string& output_extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x") {
+                       const std::string& output_extra = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x",
+                       const std::string& loading_extra = "") {
   return file_scene_head("blocks", meshes + "two_blocks.msh") + R"x(
   <ParameterList name="Loading">
     <Parameter name="Steps" type="int" value=")x" + std::to_string(steps) + R"x("/>
+    )x" + loading_extra + R"x(
     <ParameterList name="Boundary conditions">
       <ParameterList name="bottom">
         <Parameter name="Region" type="string" value="group bottom"/>
@@ -837,6 +839,48 @@ TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllows) {
   EXPECT_GT(at_bound, 0);
   std::printf("  %zu Newton iterations, %d bounded by the collision test, %d of them stepped to the bound\n", steps.size(), bounded,
               at_bound);
+}
+
+// With the barrier, every step starts from the tangent predictor (the linearised step from the last
+// state, NonlinearSolver::tangent), not only the first: its guess passes the collision test as any
+// other. The blocks pressed together end where they end from the extrapolated guesses, and the
+// predictor's CG solves are the difference between each step's CG count and its Newton iterations'.
+TEST(BarrierContact, EveryStepStartsFromTheLinearisedStepAndEndsWhereExtrapolatingDoes) {
+  const std::string barrier = R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x";
+  const std::string keep = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x";
+  auto run = [&](const std::string& loading, const std::string& dir) {
+    auto sim = std::make_unique<Simulation>(config(blocks_xml(0.4, true, 4, barrier, keep, loading), dir), RunOptions{true, ""});
+    EXPECT_EQ(sim->run(), 0);
+    return sim;
+  };
+  const auto tangent = run("", "test_results/contact_blocks_tangent" + tag());
+  const auto extrapolated = run(R"x(<Parameter name="Predictor" type="string" value="extrapolate"/>)x",
+                                "test_results/contact_blocks_extrapolated" + tag());
+  EXPECT_LT(rel_diff(gather(tangent->displacement()), gather(extrapolated->displacement())), 1e-6);
+  // Per step: the CG iterations outside its Newton iterations (log.csv's count less newton.csv's).
+  auto predictor_cg = [](const std::string& dir) {
+    const auto step = csv_column(dir + "/newton.csv", "step"), cg = csv_column(dir + "/newton.csv", "cg_iterations");
+    const auto steps = csv_column(dir + "/log.csv", "step"), total = csv_column(dir + "/log.csv", "cg_iterations");
+    std::vector<int> out;
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      int n = std::stoi(total[k]);
+      for (std::size_t i = 0; i < step.size(); ++i) n -= step[i] == steps[k] ? std::stoi(cg[i]) : 0;
+      out.push_back(n);
+    }
+    return out;
+  };
+  const std::vector<int> with = predictor_cg("test_results/contact_blocks_tangent" + tag()),
+                         without = predictor_cg("test_results/contact_blocks_extrapolated" + tag());
+  ASSERT_EQ(with.size(), 4u);
+  ASSERT_EQ(without.size(), 4u);
+  for (std::size_t k = 0; k < with.size(); ++k) {
+    EXPECT_GT(with[k], 0) << "step " << k + 1;
+    EXPECT_EQ(without[k], 0) << "step " << k + 1;
+  }
+  int tn = 0, en = 0;
+  for (const auto& r : tangent->records()) tn += r.solve.newton_iterations;
+  for (const auto& r : extrapolated->records()) en += r.solve.newton_iterations;
+  if (world()->getRank() == 0) std::printf("  Newton iterations: %d from the tangent, %d extrapolated\n", tn, en);
 }
 
 // The blocks pressed 0.3 into each other's place with the barrier: the run ends with no surface point

@@ -93,14 +93,14 @@ struct LoadingParameters {
     // Default tangent, measured against extrapolate on 1 rank x 2 threads (docs/performance.md): the
     // 969k-DOF stretch's first step 10 -> 4 Newton iterations and 83.9 -> 50.0 s; every shipped scene
     // the same or one Newton iteration fewer (the twist's pi/2 rotation refuses the tangent; scenes with
-    // contact do not use it).
+    // the springs' contact do not use it; with the barrier every step does: driver/quasi_static.cpp).
     v.choice("Predictor", predictor, Predictor::Tangent,
              Choices<Predictor>{{"none", Predictor::None}, {"extrapolate", Predictor::Extrapolate}, {"tangent", Predictor::Tangent}},
              "each step's first guess: none: the last state with the new prescribed values (and a rig's skinning); "
              "extrapolate: or the linear extrapolation of the last two converged states when its energy is "
              "lower; tangent: the same, and where there is nothing to extrapolate from (the first step, from "
-             "rest or a checkpoint; not with contact) the linearised response of the body to the guess (one CG "
-             "solve on the last state's Hessian) when its energy is lower");
+             "rest or a checkpoint; with the barrier contact, every step; not with the springs) the linearised "
+             "response of the body to the guess (one CG solve on the last state's Hessian) when its energy is lower");
     v.entry("Maximum cuts", max_cuts, 6,
             "a step that fails is retried with half the load increment, at most this many times", Range::closed(0, 30));
   }

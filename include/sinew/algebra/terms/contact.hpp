@@ -159,7 +159,9 @@ class ContactTerm final : public EnergyTerm {
   void abandon_step() override;
   void save_state(TermState& state) const override;
   void load_state(const TermState& state) override;
-  bool linearisable() const override { return false; }
+  // The barrier: its energy depends on the positions alone (a guess from its linearisation passes the
+  // collision test as any guess does). The springs: their pairs and planes are the last detection's.
+  bool linearisable() const override { return settings_.barrier; }
   // Away from the springs' nodes (and, with colliders, the surface): the energy does not depend on them.
   bool allows_node_relaxation(std::vector<char>& held) const override;
   // With the barrier: the largest step along du from u (at most t_max) after which no surface vertex has
