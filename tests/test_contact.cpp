@@ -847,15 +847,16 @@ TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllows) {
 // predictor's CG solves are the difference between each step's CG count and its Newton iterations'.
 TEST(BarrierContact, EveryStepStartsFromTheLinearisedStepAndEndsWhereExtrapolatingDoes) {
   const std::string barrier = R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x";
-  const std::string keep = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x";
+  const std::string no_checkpoints = R"x(<Parameter name="Checkpoint every" type="int" value="0"/>)x";
+  const std::string tangent_dir = "test_results/contact_blocks_tangent" + tag(),
+                    extrapolated_dir = "test_results/contact_blocks_extrapolated" + tag();
   auto run = [&](const std::string& loading, const std::string& dir) {
-    auto sim = std::make_unique<Simulation>(config(blocks_xml(0.4, true, 4, barrier, keep, loading), dir), RunOptions{true, ""});
+    auto sim = std::make_unique<Simulation>(config(blocks_xml(0.4, true, 4, barrier, no_checkpoints, loading), dir), RunOptions{true, ""});
     EXPECT_EQ(sim->run(), 0);
     return sim;
   };
-  const auto tangent = run("", "test_results/contact_blocks_tangent" + tag());
-  const auto extrapolated = run(R"x(<Parameter name="Predictor" type="string" value="extrapolate"/>)x",
-                                "test_results/contact_blocks_extrapolated" + tag());
+  const auto tangent = run("", tangent_dir);
+  const auto extrapolated = run(R"x(<Parameter name="Predictor" type="string" value="extrapolate"/>)x", extrapolated_dir);
   EXPECT_LT(rel_diff(gather(tangent->displacement()), gather(extrapolated->displacement())), 1e-6);
   // Per step: the CG iterations outside its Newton iterations (log.csv's count less newton.csv's).
   auto predictor_cg = [](const std::string& dir) {
@@ -869,8 +870,7 @@ TEST(BarrierContact, EveryStepStartsFromTheLinearisedStepAndEndsWhereExtrapolati
     }
     return out;
   };
-  const std::vector<int> with = predictor_cg("test_results/contact_blocks_tangent" + tag()),
-                         without = predictor_cg("test_results/contact_blocks_extrapolated" + tag());
+  const std::vector<int> with = predictor_cg(tangent_dir), without = predictor_cg(extrapolated_dir);
   ASSERT_EQ(with.size(), 4u);
   ASSERT_EQ(without.size(), 4u);
   for (std::size_t k = 0; k < with.size(); ++k) {

@@ -511,6 +511,14 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
 
 namespace {
 
+// A sample found inside, as a rank reports it: whether it lies in an element not folded over itself
+// there, and its depth.
+struct InsideSample {
+  int vertex;
+  int in_sound;
+  double depth;
+};
+
 // Whether local element e has a tet (its own, or one of a hex's six Kuhn tets) whose volume has another
 // sign than at rest.
 template <class Positions, class Conn>
@@ -545,7 +553,7 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     for (int a = 0; a < npe; ++a) eboxes[e].add(at.node(conn(e, a)));
   const AabbTree element_tree(eboxes);
   std::vector<Candidate> found;
-  std::vector<std::array<double, 3>> report;  // per sample inside: vertex, folded (0/1), depth
+  std::vector<InsideSample> report;
   // Every sample, kept pairs included: a kept spring whose target has slid away while its sample went
   // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
@@ -620,27 +628,25 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     // a corner whose quadrature points all stay positive held a sample 0.7 mm in front of the nearest
     // face, inside its dhat, reported 7.3 mm deep). A point pushed through a face lies in the sound
     // elements behind it.
-    report.push_back({static_cast<double>(v), in_sound ? 1.0 : 0.0, std::sqrt(d2)});
+    report.push_back({static_cast<int>(v), in_sound ? 1 : 0, std::sqrt(d2)});
   }
   // Per sample over all ranks (each holds its own elements): through a face where some rank found it
   // in a sound element, folded otherwise.
-  std::vector<std::array<double, 3>> all = allgatherv(raw_comm(*system_.comm()), report);
-  std::sort(all.begin(), all.end());
-  std::vector<std::array<double, 3>> per_sample;
-  for (const auto& r : all) {
-    if (per_sample.empty() || per_sample.back()[0] != r[0]) {
-      per_sample.push_back(r);
-    } else {
-      per_sample.back()[1] = std::max(per_sample.back()[1], r[1]);
-      per_sample.back()[2] = std::max(per_sample.back()[2], r[2]);
+  std::vector<InsideSample> all = allgatherv(raw_comm(*system_.comm()), report);
+  std::sort(all.begin(), all.end(), [](const InsideSample& a, const InsideSample& b) { return a.vertex < b.vertex; });
+  for (std::size_t i = 0; i < all.size();) {
+    int in_sound = 0;
+    double depth = 0.0;
+    const int v = all[i].vertex;
+    for (; i < all.size() && all[i].vertex == v; ++i) {
+      in_sound = std::max(in_sound, all[i].in_sound);
+      depth = std::max(depth, all[i].depth);
     }
-  }
-  for (const auto& r : per_sample) {
-    if (r[1] == 0.0) {
-      ++stats.folded;
-    } else {
+    if (in_sound) {
       ++stats.crossed;
-      stats.crossed_deepest = std::max(stats.crossed_deepest, r[2]);
+      stats.crossed_deepest = std::max(stats.crossed_deepest, depth);
+    } else {
+      ++stats.folded;
     }
   }
   return found;
@@ -940,7 +946,7 @@ std::vector<double> ContactTerm::log_values(const EvaluationTotals& totals) cons
 std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) const {
   if (totals.contacts == 0 && step_.pairs == 0) return {};
   char buf[320];
-  std::snprintf(buf, sizeof buf, "contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points inside), energy %.4g",
+  std::snprintf(buf, sizeof buf, "contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points through a face), energy %.4g",
                 totals.contacts, totals.penetration, step_.crossed_depth, totals.share(name()));
   std::string line = buf;
   if (step_.inside_folded > 0) {
