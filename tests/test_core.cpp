@@ -7,6 +7,7 @@
 #include <sinew/core/parameters.hpp>
 #include <sinew/core/validation.hpp>
 #include <sinew/core/xml_input.hpp>
+#include <sinew/solver/exact_budget.hpp>
 #include <sinew/solver/forcing.hpp>
 #include <sinew/solver/hessian_policy.hpp>
 #include <sinew/solver/preconditioner_lag.hpp>
@@ -435,6 +436,48 @@ TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProje
   p.step_taken(0.125);
   for (int k = 0; k < 4; ++k) p.next_jacobian(r, 0.0);
   EXPECT_FALSE(p.next_jacobian(r, 0.2));
+}
+
+// An exact solve gets 4 times the CG per digit of the last converged projected solve, times the digits it
+// is asked for, at least 30, within the ceiling; before any projected solve, the ceiling.
+TEST(ExactSolveBudget, FourTimesTheLastProjectedSolvesRateWithAFloorAndACeiling) {
+  ExactSolveBudget b;
+  EXPECT_EQ(b.budget(1e-2, 2000), 2000);
+  b.projected_solved(28, 1e-2, true);  // 14 per digit
+  EXPECT_EQ(b.budget(1e-2, 2000), 112);
+  EXPECT_EQ(b.budget(1e-4, 2000), 224);
+  EXPECT_EQ(b.budget(1e-4, 150), 150);
+  b.projected_solved(500, 1e-2, false);  // a solve that did not converge sets no rate
+  EXPECT_EQ(b.budget(1e-2, 2000), 112);
+  b.projected_solved(2, 1e-2, true);  // 1 per digit: the floor
+  EXPECT_EQ(b.budget(1e-2, 2000), ExactSolveBudget::min_budget);
+  b.projected_solved(0, 1e-2, true);  // a zero residual's solve keeps the last rate
+  EXPECT_EQ(b.budget(1e-2, 2000), ExactSolveBudget::min_budget);
+}
+
+// An exact solve over its CG budget falls back as a short step does: projected for 2, then 4, ...
+// Jacobians, on the short steps' count.
+TEST(HessianPolicy, AnExactSolveOverItsBudgetFallsBackAsAShortStep) {
+  HessianPolicy p(0.01, HessianPolicy::Inverted::Exact);
+  p.start(100.0);
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+  p.exact_solve_over_budget();
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  EXPECT_TRUE(p.fell_back());
+  EXPECT_FALSE(p.saddle());
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.0));
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.0));
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+  p.step_taken(0.25);  // the next short step waits 4: the same count
+  for (int k = 0; k < 4; ++k) EXPECT_FALSE(p.next_jacobian(0.5, 0.0));
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+  // From the projected Hessian it changes nothing.
+  HessianPolicy q(0.01, HessianPolicy::Inverted::Exact);
+  q.start(100.0);
+  EXPECT_FALSE(q.next_jacobian(50.0, 0.0));
+  q.exact_solve_over_budget();
+  EXPECT_EQ(q.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_FALSE(q.fell_back());
 }
 
 // A direction that does not descend where no point is inverted is a saddle of the energy: projected

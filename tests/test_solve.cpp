@@ -329,6 +329,35 @@ TEST(Solve, ExactHessianFallsBackToProjectionAndConverges) {
   EXPECT_LT(rel_diff(projected.u, eager.u), 1e-7);
 }
 
+TEST(Solve, AnExactSolveOverItsCGBudgetIsRedoneWithProjectionAndTheSolveConverges) {
+  // The eager switch of the test above, with every exact solve forced over its CG budget (none):
+  // each is redone from the same state with the projected Hessian, and the solve ends where projection
+  // alone does. Without the redo the truncated exact directions would be stepped along.
+  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
+  auto xml = [&](const char* below) {
+    return std::regex_replace(twist_xml(4.5, 1, "hex8", std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
+                                                            "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>"),
+                              std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
+  };
+  const Result projected = run(config(xml("0.0"), "test_results/solve_ob0" + tag()));
+  const Result free = run(config(xml("0.999"), "test_results/solve_ob1" + tag()));
+  setenv("SINEW_EXACT_CG_BUDGET", "0", 1);
+  const Result capped = run(config(xml("0.999"), "test_results/solve_ob2" + tag()));
+  unsetenv("SINEW_EXACT_CG_BUDGET");
+  ASSERT_EQ(projected.code, 0);
+  ASSERT_EQ(free.code, 0);
+  ASSERT_EQ(capped.code, 0);
+  const SolveReport& c = capped.records.back().solve;
+  EXPECT_GT(c.exact_over_budget, 0);
+  EXPECT_TRUE(c.exact_hessian_fell_back);
+  EXPECT_EQ(free.records.back().solve.exact_over_budget, 0);  // the measured budget leaves this twist alone
+  EXPECT_EQ(projected.records.back().solve.exact_over_budget, 0);
+  EXPECT_LT(rel_diff(projected.u, capped.u), 1e-7);
+  if (world()->getRank() == 0)
+    std::printf("[ info ] exact solves over budget: %d of %d Newton iterations redone (free: %d Newton)\n", c.exact_over_budget,
+                c.newton_iterations, free.records.back().solve.newton_iterations);
+}
+
 TEST(Solve, AFailedSolveIsRetriedWithProjectionOnlyWhenTheExactHessianWasUsed) {
   // Three Newton iterations cannot converge a pi/2 twist. With the default switch (1% of the first
   // residual) the exact Hessian is never reached: no retry, 3 iterations. With an eager switch it is

@@ -422,7 +422,9 @@ void Simulation::checkpoint() {
 void Simulation::print_step(const StepRecord& rec) const {
   if (!talk_) return;
   // Newton iterations redone because a kept preconditioner had aged (PreconditionerLag).
-  const std::string redone = rec.solve.redone_iterations > 0 ? ", " + std::to_string(rec.solve.redone_iterations) + " redone" : "";
+  std::string redone = rec.solve.redone_iterations > 0 ? ", " + std::to_string(rec.solve.redone_iterations) + " redone" : "";
+  // ... and those redone with projection because the exact Hessian's CG ran over budget (ExactSolveBudget).
+  if (rec.solve.exact_over_budget > 0) redone += ", " + std::to_string(rec.solve.exact_over_budget) + " exact over CG budget";
   // Nodes the relaxation after Newton steps moved ('Solver/Node relaxation').
   const std::string relaxed = rec.solve.relaxed_nodes > 0 ? " (" + std::to_string(rec.solve.relaxed_nodes) + " nodes relaxed)" : "";
   std::printf("  converged: %d Newton%s, %d CG; volume %+.3f%%, min J %.3g, %lld inverted points; "

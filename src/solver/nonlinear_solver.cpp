@@ -6,6 +6,7 @@
 #include <sinew/core/memory.hpp>
 #include <sinew/solver/nonlinear_solver.hpp>
 #include <sinew/solver/forcing.hpp>
+#include <sinew/solver/exact_budget.hpp>
 #include <sinew/solver/preconditioner_lag.hpp>
 
 #include <NOX.H>
@@ -81,6 +82,9 @@ struct SolveState {
   // search is not Sinew's energy backtracking, which records it.
   double direction_max = 0.0;
   double step_bound = HUGE_VAL;  // the running iteration's bound on its step (NewtonIterate::step_bound)
+  ExactSolveBudget* exact_budget = nullptr;   // the solver's, kept across solves
+  bool last_solve_converged = true;           // whether the last linear solve met its tolerance
+  int exact_over_budget = 0;                  // exact solves over their CG budget, redone projected
 };
 
 // The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
@@ -108,6 +112,11 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget, s.policy.last_exact());
     // Fault injection for the tests of the redo path: a CG budget that no kept solve meets.
     if (const char* forced = std::getenv("SINEW_KEPT_CG_BUDGET"); forced && !update) budget = std::atoi(forced);
+    if (s.exact_budget && s.policy.last_exact()) {
+      budget = std::min(budget, s.exact_budget->budget(s.linear_tolerance(), max_iterations_));
+      // Fault injection for the tests of the redo path: a budget no exact solve meets.
+      if (const char* forced = std::getenv("SINEW_EXACT_CG_BUDGET")) budget = std::atoi(forced);
+    }
     solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
     trace_memory("matrix assembled");
     if (update)
@@ -347,6 +356,16 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       grp.computeF();
       return true;
     }
+    // An exact solve over its CG budget (ExactSolveBudget): the state is not where the exact Hessian is
+    // positive definite yet; redo the iteration with the projected one.
+    if (state.policy.last_exact() && !state.last_solve_converged) {
+      state.policy.exact_solve_over_budget();
+      ++state.exact_over_budget;
+      step = 0.0;
+      grp.computeX(old, dir, 0.0);
+      grp.computeF();
+      return true;
+    }
     if (!(slope < 0.0)) {
       const bool retry = state.policy.last_exact();
       state.policy.direction_not_descent();
@@ -465,10 +484,16 @@ class ProgressObserver : public NOX::Observer {
   void runPreLineSearch(const NOX::Solver::Generic& solver) override {
     // The direction's linear solve has just ended: tell the preconditioner's lag how it went.
     trace_memory("linear solve");
-    if (PreconditionerLag* lag = model_.state().lag)
-      if (auto stats = solver.getSolverStatistics())
-        lag->solved(stats->linearSolve.lastLinearSolve_NumIterations, model_.state().linear_tolerance(),
-                    stats->linearSolve.lastLinearSolve_Converged, solver.getPreviousSolutionGroup().getNormF());
+    SolveState& state = model_.state();
+    if (auto stats = solver.getSolverStatistics()) {
+      const auto& ls = stats->linearSolve;
+      state.last_solve_converged = ls.lastLinearSolve_Converged;
+      if (state.lag)
+        state.lag->solved(ls.lastLinearSolve_NumIterations, state.linear_tolerance(), ls.lastLinearSolve_Converged,
+                          solver.getPreviousSolutionGroup().getNormF());
+      if (state.exact_budget && !state.policy.last_exact())
+        state.exact_budget->projected_solved(ls.lastLinearSolve_NumIterations, state.linear_tolerance(), ls.lastLinearSolve_Converged);
+    }
     t_ls_ = Clock::now();
     asm_before_ls_ = model_.state().seconds_assembly;
   }
@@ -620,6 +645,7 @@ struct NonlinearSolver::Impl {
   double cg_per_newton_after_rebuild = 0.0;
   unsigned pattern_version = 0;  // the system's pattern W was made on
   PreconditionerLag lag;
+  ExactSolveBudget exact_budget;
 
   // A term asked for new couplings (contact): W on the new graph, and a preconditioner set up afresh.
   void follow_pattern() {
@@ -793,6 +819,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   const SolverParameters& p = m.params;
   const auto t0 = Clock::now();
   SolveState state{policy, &m.lag, nullptr, {}, 0.0, 0.0};
+  state.exact_budget = &m.exact_budget;
   const int updates_before = m.lag.updates(), redos_before = m.lag.redos();
   m.follow_pattern();
   m.model->attach(&state);
@@ -887,6 +914,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   report.exact_hessian_used = state.policy.exact_used();
   report.preconditioner_updates = m.lag.updates() - updates_before;
   report.redone_iterations = m.lag.redos() - redos_before;
+  report.exact_over_budget = state.exact_over_budget;
   report.relaxed_nodes = state.relaxed_nodes;
   report.exact_hessian_fell_back = state.policy.fell_back();
   m.model->attach(nullptr);

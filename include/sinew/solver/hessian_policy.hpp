@@ -10,7 +10,8 @@
 // equilibrium instead of going back to rest), or WholeMesh (any inverted point keeps the whole Hessian
 // projected); undefined points (Neo-Hookean, J <= 0) always do. Fall back to projection at the first
 // sign that the state is not yet in the quadratic region: a direction that does not descend, a step the
-// line search had to cut below 1/2, or a failed line search; try the exact Hessian again once projected
+// line search had to cut below 1/2, an exact solve over its CG budget (exact_budget.hpp), or a failed
+// line search; try the exact Hessian again once projected
 // Newton has brought the residual ten times below where it failed, and after a short step or a failed
 // line search also after 2, 4, 8, ... projected iterations (the k-th such fall-back of the solve waits
 // 2^k), whichever comes first. Projected Newton near a crease converges linearly (on the 48k-cell
@@ -110,6 +111,8 @@ class HessianPolicy {
     if (step < 0.5) fall_back(first_wait, &short_falls_);
   }
   void line_search_failed() { fall_back(first_wait, &short_falls_); }
+  // An exact solve that did not converge within its CG budget (ExactSolveBudget): as a short step.
+  void exact_solve_over_budget() { fall_back(first_wait, &short_falls_); }
 
   // Redo a failed solve with projection throughout?
   bool retry_projected() const { return exact_used_; }
