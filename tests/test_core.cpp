@@ -439,7 +439,7 @@ TEST(HessianPolicy, AfterAShortExactStepTriesAgainAfterTwoThenFourThenEightProje
 }
 
 // An exact solve gets 4 times the CG per digit of the last converged projected solve, times the digits it
-// is asked for, at least 30, within the ceiling; before any projected solve, the ceiling.
+// is asked for, at least 100, within the ceiling; before any projected solve, the ceiling.
 TEST(ExactSolveBudget, FourTimesTheLastProjectedSolvesRateWithAFloorAndACeiling) {
   ExactSolveBudget b;
   EXPECT_EQ(b.budget(1e-2, 2000), 2000);
@@ -449,6 +449,8 @@ TEST(ExactSolveBudget, FourTimesTheLastProjectedSolvesRateWithAFloorAndACeiling)
   EXPECT_EQ(b.budget(1e-4, 150), 150);
   b.projected_solved(500, 1e-2, false);  // a solve that did not converge sets no rate
   EXPECT_EQ(b.budget(1e-2, 2000), 112);
+  b.projected_solved(20, 1e-2, true);  // 10 per digit: 80, below the floor
+  EXPECT_EQ(b.budget(1e-2, 2000), ExactSolveBudget::min_budget);
   b.projected_solved(2, 1e-2, true);  // 1 per digit: the floor
   EXPECT_EQ(b.budget(1e-2, 2000), ExactSolveBudget::min_budget);
   b.projected_solved(0, 1e-2, true);  // a zero residual's solve keeps the last rate

@@ -306,19 +306,22 @@ TEST(Solve, EveryProjectionOnHexAndTetReachesTheSameState) {
   }
 }
 
+// A 4.5 rad twist in one step at nu = 0.49 with 'Exact Hessian below' = `below`, and an update of the
+// preconditioner per Jacobian, so that the measured path is the Hessian policy's alone.
+static std::string eager_twist_xml(const char* below) {
+  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
+  return std::regex_replace(twist_xml(4.5, 1, "hex8", std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
+                                                          "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>"),
+                            std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
+}
+
 TEST(Solve, ExactHessianFallsBackToProjectionAndConverges) {
   // Exact Hessian as soon as the residual drops at all: far from the solution it gives directions that
   // do not descend or need short steps, so the policy must fall back, and the solve still converge to
   // the state projection alone reaches.
   // A 4.5 rad twist in one step at nu = 0.49 (measured: exact from iteration 3, a step of 1/4 at
   // iteration 5, projected from then on).
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
-  // An update per Jacobian: the measured path is the Hessian policy's alone.
-  auto xml = [&](const char* below) {
-    return std::regex_replace(twist_xml(4.5, 1, "hex8", std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
-                                                            "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>"),
-                              std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
-  };
+  const auto xml = eager_twist_xml;
   const Result projected = run(config(xml("0.0"), "test_results/solve_fb0" + tag()));
   const Result eager = run(config(xml("0.999"), "test_results/solve_fb1" + tag()));
   ASSERT_EQ(projected.code, 0);
@@ -333,12 +336,7 @@ TEST(Solve, AnExactSolveOverItsCGBudgetIsRedoneWithProjectionAndTheSolveConverge
   // The eager switch of the test above, with every exact solve forced over its CG budget (none):
   // each is redone from the same state with the projected Hessian, and the solve ends where projection
   // alone does. Without the redo the truncated exact directions would be stepped along.
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
-  auto xml = [&](const char* below) {
-    return std::regex_replace(twist_xml(4.5, 1, "hex8", std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
-                                                            "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>"),
-                              std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
-  };
+  const auto xml = eager_twist_xml;
   const Result projected = run(config(xml("0.0"), "test_results/solve_ob0" + tag()));
   const Result free = run(config(xml("0.999"), "test_results/solve_ob1" + tag()));
   setenv("SINEW_EXACT_CG_BUDGET", "0", 1);
