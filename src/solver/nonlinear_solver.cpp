@@ -344,36 +344,34 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     const NOX::Abstract::Group& old = s.getPreviousSolutionGroup();
     // The old group's F was computed at its x; the model's last evaluation may be elsewhere.
     const auto& xold = dynamic_cast<const NOX::Thyra::Vector&>(old.getX());
-    const double E0 = model_.energy(xold.getThyraVector());
     const double slope = old.getF().innerProduct(dir);
     const double F0 = old.getNormF();
     state.direction_max = dir.norm(NOX::Abstract::Vector::MaxNorm);
-    // A direction from a kept preconditioner that failed (PreconditionerLag): redo it with an updated
-    // one, from the same state, before anything else is decided about it.
-    if (state.lag && state.lag->redo(slope < 0.0, F0)) {
+    // No step: the group stays at the old state (step 0), and the iteration is redone (`redo`) or the
+    // line search has failed.
+    auto stay = [&](bool redo) {
       step = 0.0;
       grp.computeX(old, dir, 0.0);
       grp.computeF();
-      return true;
-    }
+      return redo;
+    };
+    // A direction from a kept preconditioner that failed (PreconditionerLag): redo it with an updated
+    // one, from the same state, before anything else is decided about it.
+    if (state.lag && state.lag->redo(slope < 0.0, F0)) return stay(true);
     // An exact solve over its CG budget (ExactSolveBudget): the state is not where the exact Hessian is
     // positive definite yet; redo the iteration with the projected one.
     if (state.policy.last_exact() && !state.last_solve_converged) {
       state.policy.exact_solve_over_budget();
       ++state.exact_over_budget;
-      step = 0.0;
-      grp.computeX(old, dir, 0.0);
-      grp.computeF();
-      return true;
+      return stay(true);
     }
     if (!(slope < 0.0)) {
       const bool retry = state.policy.last_exact();
       state.policy.direction_not_descent();
-      step = 0.0;
-      grp.computeX(old, dir, 0.0);
-      grp.computeF();
-      return retry;
+      return stay(retry);
     }
+    // The energy at the old state, evaluated only now that a step is tried.
+    const double E0 = model_.energy(xold.getThyraVector());
     // A term that bounds the steps (a contact barrier: no surface point through a face) has the first
     // trial, and any longer one, start no farther. (Looked up to the usual cap: with such a term, a
     // saddle's longer steps stop there too.)
@@ -396,10 +394,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
     }
     state.policy.line_search_failed();
     // Failure: leave the old state in place; NOX reports the failed line search.
-    step = 0.0;
-    grp.computeX(old, dir, 0.0);
-    grp.computeF();
-    return false;
+    return stay(false);
   }
 
  private:

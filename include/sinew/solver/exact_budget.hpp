@@ -39,7 +39,7 @@ class ExactSolveBudget {
   int budget(double tolerance, int ceiling) const {
     if (!(per_digit_ > 0.0)) return ceiling;
     const double b = std::ceil(factor * per_digit_ * PreconditionerLag::digits(tolerance));
-    return std::min(ceiling, std::max(min_budget, static_cast<int>(std::min(b, 1e9))));
+    return std::min(ceiling, std::max(min_budget, static_cast<int>(std::min(b, static_cast<double>(ceiling)))));
   }
 
  private:
