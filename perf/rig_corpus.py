@@ -34,7 +34,7 @@ CLIPS = [
 ]
 
 
-def scene(name, rig, clip, span, cell, extra, dynamic, frames, out):
+def scene(name, rig, clip, span, cell, extra, dynamic, frames, out, model=""):
     start, end = span
     skeleton = ('<Parameter name="Rig" type="string" value="%s"/>' % rig +
                 ('<Parameter name="Clip" type="string" value="%s"/>' % clip if clip else "") +
@@ -43,6 +43,7 @@ def scene(name, rig, clip, span, cell, extra, dynamic, frames, out):
     time_or_steps = ('<ParameterList name="Time"><Parameter name="Integrator" type="string" value="backward-euler"/>'
                      '<Parameter name="Frames" type="int" value="%d"/></ParameterList>' % frames if dynamic else
                      '<ParameterList name="Loading"><Parameter name="Steps" type="int" value="%d"/></ParameterList>' % frames)
+    model_entry = '<Parameter name="Self contact model" type="string" value="%s"/>' % model if model else ""
     return f'''<ParameterList name="Sinew">
   <Parameter name="Scene" type="string" value="{name}"/>
   <ParameterList name="Mesh"><Parameter name="Type" type="string" value="rig"/>
@@ -51,7 +52,7 @@ def scene(name, rig, clip, span, cell, extra, dynamic, frames, out):
     <Parameter name="Young modulus" type="double" value="2.0e4"/><Parameter name="Poisson ratio" type="double" value="0.45"/></ParameterList>
   {time_or_steps}
   <ParameterList name="Skeleton">{skeleton}</ParameterList>
-  <ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>
+  <ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/>{model_entry}</ParameterList>
   <ParameterList name="Output"><Parameter name="Directory" type="string" value="{out}"/>
     <Parameter name="Checkpoint every" type="int" value="0"/><Parameter name="Skin glTF" type="bool" value="false"/><Parameter name="Skin PC2" type="bool" value="false"/><Parameter name="Surface OBJ" type="bool" value="false"/></ParameterList>
 </ParameterList>
@@ -92,6 +93,7 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--timeout", type=float, default=1800.0)
     ap.add_argument("--check", action="store_true")
+    ap.add_argument("--model", default="", help="'Self contact model' (springs, barrier); default: Sinew's own")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     results = []
@@ -108,7 +110,7 @@ def main():
             dynamic = mode == "dynamic"
             out = os.path.join(a.out, f"{name}_{mode}")
             xml = os.path.join(a.out, f"{name}_{mode}.xml")
-            open(xml, "w").write(scene(name, rig, clip, span, cell, extra, dynamic, frames, out))
+            open(xml, "w").write(scene(name, rig, clip, span, cell, extra, dynamic, frames, out, a.model))
             t0 = time.time()
             with open(os.path.join(a.out, f"{name}_{mode}.log"), "w") as log:
                 try:

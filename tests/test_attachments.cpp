@@ -171,7 +171,7 @@ TEST(Attachments, ASlidingBlockCarriesNoTangentialForceAndAFixedOneMovesWithItsB
 // Self contact on: the attached interface touches at rest, yet contact pairs none of its nodes (the
 // attachment holds them), and the sliding run gives the same state as without contact.
 TEST(Attachments, SelfContactLeavesAnAttachedInterfaceAlone) {
-  const std::string contact = R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>)x";
+  const std::string contact = R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/><Parameter name="Self contact model" type="string" value="springs"/></ParameterList>)x";
   Simulation with(config(stacked("sliding", "{0.1, 0.05, 0}", contact, 2), results("attachment_contact")), RunOptions{true, ""});
   ASSERT_EQ(with.run(), 0);
   Simulation without(config(stacked("sliding", "{0.1, 0.05, 0}", "", 2), results("attachment_no_contact")), RunOptions{true, ""});
@@ -339,6 +339,41 @@ std::string twisted_box(const std::string& attachment) {
 
 }  // namespace
 
+// 'Bone attachment' auto (the default): soft bones where the barrier holds self contact (its collision test
+// bounds free nodes only, and a prescribed bone node would carry the surface through a face), fixed bones
+// otherwise; a 'Bone stiffness' for bones that end up fixed is an input error, and an explicit choice wins.
+TEST(Attachments, BonesAreSoftByDefaultWhereTheBarrierHoldsSelfContactAndFixedOtherwise) {
+  using A = SkeletonParameters::Attachment;
+  auto with = [](const std::string& skeleton, const std::string& contact) {
+    std::string xml = twisted_box(skeleton);
+    if (!contact.empty())
+      xml.insert(xml.find("<ParameterList name=\"Loading\">"), "<ParameterList name=\"Contact\">" + contact + "</ParameterList>\n  ");
+    return config(xml, results("bones_auto"));
+  };
+  const std::string self = R"x(<Parameter name="Self contact" type="bool" value="true"/>)x";
+  const std::string springs = R"x(<Parameter name="Self contact model" type="string" value="springs"/>)x";
+  EXPECT_EQ(with("", "").params.skeleton.attachment, A::Fixed);
+  const SceneConfig barrier = with("", self);
+  EXPECT_EQ(barrier.params.terms.of<Contact>().model, ContactParameters::Model::Barrier);  // the default model
+  EXPECT_EQ(barrier.params.skeleton.attachment, A::Soft);
+  EXPECT_EQ(with("", self + springs).params.skeleton.attachment, A::Fixed);
+  EXPECT_EQ(with(R"x(<Parameter name="Bone attachment" type="string" value="fixed"/>)x", self).params.skeleton.attachment, A::Fixed);
+  EXPECT_EQ(with(R"x(<Parameter name="Bone attachment" type="string" value="soft"/>)x", "").params.skeleton.attachment, A::Soft);
+  const std::string stiffness = R"x(<Parameter name="Bone stiffness" type="double" value="1.0e6"/>)x";
+  EXPECT_EQ(with(stiffness, self).params.skeleton.attachment, A::Soft);
+  try {
+    with(stiffness, self + springs);
+    ADD_FAILURE() << "a bone stiffness for fixed bones was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'Bone stiffness' applies to soft bones"), std::string::npos) << e.what();
+  }
+  // The run holds the box by the bone springs' term, with nothing prescribed.
+  Simulation run(with("", self), RunOptions{true, ""});
+  ASSERT_EQ(run.run(), 0);
+  EXPECT_NE(run.scene().system().find_term<BoneSpringTerm>(), nullptr);
+  EXPECT_TRUE(run.scene().system().fixed_owned_dofs().empty());
+}
+
 // Soft bones: springs to the bones' motion (an energy term, PSD: k_n I per node) instead of prescribed
 // nodes. The twisted box they hold differs from the fixed bones' by an offset that falls as 1/stiffness
 // (ten times stiffer: ten times closer, to 20%); the term's gradient and Hessian match finite differences.
@@ -382,7 +417,7 @@ namespace {
 
 // The stacked blocks with no attachment, self contact on, the upper block's top moved by `press`.
 std::string touching(const std::string& press) {
-  std::string xml = stacked("fixed", press, R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/></ParameterList>)x", 2);
+  std::string xml = stacked("fixed", press, R"x(<ParameterList name="Contact"><Parameter name="Self contact" type="bool" value="true"/><Parameter name="Self contact model" type="string" value="springs"/></ParameterList>)x", 2);
   const auto a = xml.find("<ParameterList name=\"Attachments\">");
   const auto b = xml.find("</ParameterList>\n  </ParameterList>", a) + std::string("</ParameterList>\n  </ParameterList>").size();
   return xml.erase(a, b - a);

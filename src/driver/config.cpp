@@ -38,6 +38,18 @@ SceneConfig make_scene(const Teuchos::RCP<Teuchos::ParameterList>& params, const
       c.params.mesh.rig_rest_clip = c.params.skeleton.retarget.empty() ? c.params.skeleton.clip : "";
       c.params.mesh.rig_rest_time = c.params.skeleton.rest_time;
     }
+    // 'Bone attachment' auto: soft bones where the barrier holds self contact, whose collision test bounds
+    // the free nodes' steps only (a prescribed bone node would carry the surface through a face: with
+    // fixed bones BCN_Epileptic's clip fails at its knee, docs/performance.md), fixed bones otherwise.
+    SkeletonParameters& sk = c.params.skeleton;
+    if (sk.attachment == SkeletonParameters::Attachment::Auto) {
+      const ContactParameters& contact = c.params.terms.of<Contact>();
+      const bool barrier = contact.self && contact.model == ContactParameters::Model::Barrier;
+      sk.attachment = barrier ? SkeletonParameters::Attachment::Soft : SkeletonParameters::Attachment::Fixed;
+      if (!barrier && sk.bone_stiffness > 0.0)
+        throw InputError("Skeleton: 'Bone stiffness' applies to soft bones: 'Bone attachment' soft, or auto (the default) "
+                         "with Contact/'Self contact model' barrier and 'Self contact' on; these bones are fixed");
+    }
   } catch (const InputError& e) {
     throw e.prefixed(name + ": ");
   }
@@ -198,7 +210,7 @@ std::string describe(const SceneConfig& c) {
     else
       os << "its end";
     if (p.skeleton.rest_time >= 0.0) os << ", rest pose at " << p.skeleton.rest_time << " s of its own clip";
-    os << "\n";
+    os << (p.skeleton.attachment == SkeletonParameters::Attachment::Soft ? ", soft bones" : ", fixed bones") << "\n";
     if (p.mesh.rig != p.skeleton.rig) os << indented(describe(read_rig_file(p.skeleton.rig)));
     if (!p.skeleton.retarget.empty()) {
       os << "  the clip retargeted from " << p.skeleton.retarget << " by " << Retarget::parse_map(p.skeleton.joint_map).size()
@@ -207,7 +219,8 @@ std::string describe(const SceneConfig& c) {
     }
   }
   if (!p.skeleton.bones.empty()) {
-    os << "skeleton: " << p.skeleton.bones.size() << " bones" << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
+    os << "skeleton: " << p.skeleton.bones.size() << (p.skeleton.attachment == SkeletonParameters::Attachment::Soft ? " soft" : " fixed")
+       << " bones" << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
     for (const auto& [name, b] : p.skeleton.bones)
       os << "  " << name << ": " << b.region.region << (b.parent.empty() ? "" : ", child of " + b.parent) << ", "
          << b.keyframes.size() << " keyframes\n";

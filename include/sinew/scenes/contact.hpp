@@ -74,7 +74,7 @@ struct ContactParameters {
   double stiffness = 0.0, thickness = 0.0, margin = 0.0;
   bool refine = true, smooth = false, keep = false;
   enum class Model { Springs, Barrier };
-  Model model = Model::Springs;
+  Model model = Model::Barrier;
   int rounds = 0;
   NamedSections<ColliderParameters> colliders;
 
@@ -90,12 +90,14 @@ struct ContactParameters {
     v.entry("Margin", margin, 0.0,
             "self contact: surface points this close to the surface are paired before they touch (0: thickness + h / 2)",
             Range::non_negative());
-    v.choice("Self contact model", model, Model::Springs,
+    v.choice("Self contact model", model, Model::Barrier,
              Choices<Model>{{"springs", Model::Springs}, {"barrier", Model::Barrier}},
-             "springs: the paper's penalty springs on planes frozen at detection (Sec. 6); barrier: a log barrier "
-             "on each surface point's distance to the faces near it, which grows without bound as they touch, with "
-             "every Newton step cut short of a point passing through a face (after Li et al. 2020; 'Thickness' is "
-             "where it starts; experimental: use it with Skeleton/'Bone attachment' soft, docs/contact.md)");
+             "barrier: a log barrier on each surface point's distance to the faces near it, which grows without "
+             "bound as they touch, with every Newton step and first guess cut short of a point passing through a "
+             "face (after Li et al. 2020; 'Thickness' is where it starts; a rig's bones are then soft: Skeleton/"
+             "'Bone attachment' auto); springs: the paper's penalty springs on planes frozen at detection (Sec. 6), "
+             "fewer Newton iterations where they hold, but points can end deeper than 'Thickness' and some clips do "
+             "not finish (docs/contact.md)");
     v.entry("Refine targets", refine, true,
             "self contact: move each target to the closest point of the deformed surface nearby (the paper's local "
             "optimization)");
@@ -126,7 +128,7 @@ struct ContactParameters {
     if (model == Model::Barrier) {
       for (const char* spring_only : {"Smooth onset", "Keep springs across steps", "Refine targets"})
         if (c.given(spring_only))
-          c.fail(std::string("'") + spring_only + "' applies to 'Self contact model' springs only");
+          c.fail(std::string("'") + spring_only + "' applies to 'Self contact model' springs only (barrier is the default)");
     }
   }
 };
@@ -159,7 +161,7 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
 struct Contact {
   using Parameters = ContactParameters;
   static constexpr const char* section = "Contact";
-  static constexpr const char* doc = "self contact and kinematic colliders (penalty springs on the surface)";
+  static constexpr const char* doc = "self contact (a barrier, or the paper's penalty springs) and kinematic colliders (penalty springs)";
   static bool active(const Parameters& p) { return p.active(); }
   static std::shared_ptr<EnergyTerm> make(const Parameters& p, const TermContext& c);
   static void resolve_paths(Parameters& p, const std::function<void(std::string&)>& resolve) {

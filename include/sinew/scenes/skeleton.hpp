@@ -88,8 +88,8 @@ struct SkeletonParameters {
   double falloff = 0.0, clip_start = 0.0, clip_end = -1.0, bone_radius = 0.0, sample_rate = 30.0, rest_time = -1.0,
          retarget_scale = 0.0;
   bool rig_weights = false;
-  enum class Attachment { Fixed, Soft };
-  Attachment attachment = Attachment::Fixed;
+  enum class Attachment { Auto, Fixed, Soft };
+  Attachment attachment = Attachment::Auto;  // resolved to Fixed or Soft when the scene is read (driver/config)
   double bone_stiffness = 0.0;
   enum class BoneRegions { SkinWeights, Capsules };
   BoneRegions bone_regions = BoneRegions::SkinWeights;
@@ -100,10 +100,12 @@ struct SkeletonParameters {
   template <class V>
   void visit(V& v) {
     v.sections("Bones", bones, "one sublist per bone, named as the bone");
-    v.choice("Bone attachment", attachment, Attachment::Fixed,
-             Choices<Attachment>{{"fixed", Attachment::Fixed}, {"soft", Attachment::Soft}},
+    v.choice("Bone attachment", attachment, Attachment::Auto,
+             Choices<Attachment>{{"auto", Attachment::Auto}, {"fixed", Attachment::Fixed}, {"soft", Attachment::Soft}},
              "how bones hold their nodes: fixed (the nodes move with the bone, prescribed) or soft (each node pulled "
-             "towards where the bone carries it by a stiff spring, an energy term: algebra/terms/bone_springs.hpp)");
+             "towards where the bone carries it by a stiff spring, an energy term: algebra/terms/bone_springs.hpp); "
+             "auto: soft where Contact/'Self contact model' is barrier with self contact on (its collision test must "
+             "see every node: a prescribed bone node would carry the surface through a face), fixed otherwise");
     v.entry("Bone stiffness", bone_stiffness, 0.0,
             "soft attachment: the springs' stiffness per volume per length (0: 100 (mu_L + lambda_L) / h^2, h the mean "
             "edge length: a node's spring a hundred times a cell's stiffness)",
@@ -308,7 +310,7 @@ class Skeleton {
 
 template <class Context>
 void SkeletonParameters::check(const Context& c) const {
-  if (c.given("Bone stiffness") && attachment != Attachment::Soft) c.fail("'Bone stiffness' applies to 'Bone attachment' soft only");
+  if (c.given("Bone stiffness") && attachment == Attachment::Fixed) c.fail("'Bone stiffness' applies to 'Bone attachment' soft only");
   if (!rig.empty()) {
     if (!bones.empty()) c.fail("give 'Bones' or a 'Rig' (whose joints are the bones), not both");
     if (!motion_file.empty()) c.fail("give a 'Motion file' or a 'Rig' (whose clip moves the bones), not both");
