@@ -210,7 +210,7 @@ std::string describe(const SceneConfig& c) {
     else
       os << "its end";
     if (p.skeleton.rest_time >= 0.0) os << ", rest pose at " << p.skeleton.rest_time << " s of its own clip";
-    os << (p.skeleton.attachment == SkeletonParameters::Attachment::Soft ? ", soft bones" : ", fixed bones") << "\n";
+    os << ", " << p.skeleton.attachment_word() << " bones\n";
     if (p.mesh.rig != p.skeleton.rig) os << indented(describe(read_rig_file(p.skeleton.rig)));
     if (!p.skeleton.retarget.empty()) {
       os << "  the clip retargeted from " << p.skeleton.retarget << " by " << Retarget::parse_map(p.skeleton.joint_map).size()
@@ -219,8 +219,8 @@ std::string describe(const SceneConfig& c) {
     }
   }
   if (!p.skeleton.bones.empty()) {
-    os << "skeleton: " << p.skeleton.bones.size() << (p.skeleton.attachment == SkeletonParameters::Attachment::Soft ? " soft" : " fixed")
-       << " bones" << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
+    os << "skeleton: " << p.skeleton.bones.size() << " " << p.skeleton.attachment_word() << " bones"
+       << (p.skeleton.skinning ? ", skinning guess" : "") << "\n";
     for (const auto& [name, b] : p.skeleton.bones)
       os << "  " << name << ": " << b.region.region << (b.parent.empty() ? "" : ", child of " + b.parent) << ", "
          << b.keyframes.size() << " keyframes\n";

@@ -174,8 +174,8 @@ void Simulation::print_header() const {
   std::printf("  material: %s\n", describe(sys.material()).c_str());
   if (!config_.params.skeleton.rig.empty()) {
     const Skeleton& sk = scene_->skeleton();
-    std::printf("  skeleton: %s; %s; motion made rigid to %.1e\n", sk.joint_summary().c_str(),
-                config_.params.skeleton.attachment == SkeletonParameters::Attachment::Soft ? "soft bones" : "fixed bones", sk.nonrigid());
+    std::printf("  skeleton: %s; %s bones; motion made rigid to %.1e\n", sk.joint_summary().c_str(),
+                config_.params.skeleton.attachment_word(), sk.nonrigid());
   }
   if (bones.speed > 0.0) {
     // Flesh follows its bones by shear waves. Where the bones move faster than those travel, a layer of

@@ -90,6 +90,8 @@ struct SkeletonParameters {
   bool rig_weights = false;
   enum class Attachment { Auto, Fixed, Soft };
   Attachment attachment = Attachment::Auto;  // resolved to Fixed or Soft when the scene is read (driver/config)
+  // The resolved attachment's word for messages: "soft" or "fixed".
+  const char* attachment_word() const { return attachment == Attachment::Soft ? "soft" : "fixed"; }
   double bone_stiffness = 0.0;
   enum class BoneRegions { SkinWeights, Capsules };
   BoneRegions bone_regions = BoneRegions::SkinWeights;
