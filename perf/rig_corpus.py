@@ -6,7 +6,7 @@ clip's end, quasi-static (one load step per frame at 24 fps) and with inertia (b
     perf/rig_corpus.py --sinew build/sinew --out results/perf/rigs [--only NAME,...] [--modes M,...] [--quick] [--check]
 
 Prints one line per run (frames done, Newton and CG per frame, seconds per frame, inverted points,
-deepest penetration, surface points inside elements folded over themselves, volume change) and writes rigs.json and rigs.md in --out. --quick runs the
+deepest penetration, surface points inside elements where the mesh folds (no face crossed), volume change) and writes rigs.json and rigs.md in --out. --quick runs the
 first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
 frames with no inverted point at a quasi-static frame end, its deepest penetration below the contact
 thickness (0.05 cells) and its volume within 2% of the rest's."""
@@ -75,7 +75,7 @@ def summarize(log_csv, frames):
         "min_J": min([float(r["min_J"]) for r in rows] or [1.0]),
         # A spring's sample behind its target, or a surface point found through a face by the step's
         # last detection with no spring pushing it out yet (crossed_depth): both are penetration. A
-        # point inside only elements folded over themselves went through no face: counted apart
+        # point inside an element that the surface does not enclose went through no face: counted apart
         # (inside_folded; logs older than that column have inside_depth, which counts both).
         "penetration_max": max([max(float(r.get("penetration") or 0.0), float(r.get("crossed_depth", r.get("inside_depth")) or 0.0))
                                 for r in rows] or [0.0]),

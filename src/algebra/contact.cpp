@@ -511,32 +511,26 @@ std::vector<ContactTerm::Candidate> ContactTerm::kept_candidates(const Positions
 
 namespace {
 
-// A sample found inside, as a rank reports it: whether it lies in an element not folded over itself
-// there, and its depth.
+// A sample found inside, as a rank reports it: whether the surface encloses it (went through a face),
+// and its depth.
 struct InsideSample {
   int vertex;
-  int in_sound;
+  int crossed;
   double depth;
 };
 
-// Whether local element e has a tet (its own, or one of a hex's six Kuhn tets) whose volume has another
-// sign than at rest.
-template <class Positions, class Conn>
-bool element_folded(const Positions& at, const Conn& conn, int e, bool hex) {
-  const int ntets = hex ? 6 : 1;
-  for (int k = 0; k < ntets; ++k) {
-    Vec x[4], X[4];
-    for (int a = 0; a < 4; ++a) {
-      const int n = conn(e, hex ? kHexTets[k][a] : a);
-      x[a] = at.node(n);
-      X[a] = {at.X(n, 0), at.X(n, 1), at.X(n, 2)};
-    }
-    if (!(tet_volume6(x[0], x[1], x[2], x[3]) * tet_volume6(X[0], X[1], X[2], X[3]) > 0.0)) return true;
-  }
-  return false;
-}
-
 }  // namespace
+
+double ContactTerm::winding_number(const std::vector<Vec>& x, int v) const {
+  // The triangles around v subtend no solid angle from it, so on a closed surface that does not pass
+  // through itself this is the share of the sphere around v that the body fills: in (0, 1). It moves
+  // by a whole number only where v passes through a face (or a face over v), never by folding.
+  const auto& T = surface_.triangles;
+  double omega = 0.0;
+  for (const auto& t : T)
+    if (t[0] != v && t[1] != v && t[2] != v) omega += solid_angle(x[v], x[t[0]], x[t[1]], x[t[2]]);
+  return omega / (4.0 * M_PI);
+}
 
 std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positions& at, const std::vector<char>& paired,
                                                                    const std::vector<double>& carried,
@@ -558,10 +552,10 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
   // in through a neighbouring triangle is stale, and the sample's new inside pair replaces it.
   for (std::size_t v = 0; v < surface_.vertices(); ++v) {
     if (paired[v] == 2 || (!tied_.empty() && tied_[v])) continue;
-    bool inside = false, in_sound = false;  // in some element; in one not folded over itself
+    bool inside = false;
     Vec Xref{};
     element_tree.at_point(x[v], [&](int e) {
-      if (in_sound) return;
+      if (inside) return;
       for (int a = 0; a < npe; ++a)
         if (surface_.in_ring(static_cast<int>(v), mesh.node_gid[conn(e, a)])) return;
       const int ntets = hex ? 6 : 1;
@@ -571,12 +565,9 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
         double l[4];
         if (!tet_barycentric(x[v], at.node(nodes[0]), at.node(nodes[1]), at.node(nodes[2]), at.node(nodes[3]), l)) continue;
         if (l[0] < -1e-12 || l[1] < -1e-12 || l[2] < -1e-12 || l[3] < -1e-12) continue;
-        in_sound = !element_folded(at, conn, e, hex);
-        if (!inside) {
-          inside = true;
-          Xref = {0.0, 0.0, 0.0};
-          for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{at.X(nodes[a], 0), at.X(nodes[a], 1), at.X(nodes[a], 2)};
-        }
+        inside = true;
+        Xref = {0.0, 0.0, 0.0};
+        for (int a = 0; a < 4; ++a) Xref = Xref + l[a] * Vec{at.X(nodes[a], 0), at.X(nodes[a], 1), at.X(nodes[a], 2)};
         break;
       }
     });
@@ -622,27 +613,27 @@ std::vector<ContactTerm::Candidate> ContactTerm::inside_candidates(const Positio
     const Vec n = norm(d) > 1e-12 * settings_.margin && dot(d, face) > 0.0 ? normalized(d) : face;
     found.push_back({static_cast<int>(v), 0, t, {w[0], w[1], w[2]}, {n[0], n[1], n[2]}, d2, refined, carried[v]});
     stats.deepest = std::max(stats.deepest, std::sqrt(d2));
-    // Told apart for the report only (the pair is made either way): a sample that lies only in elements
-    // with a tet turned inside out went through no face. Such an element has folded over itself and its
-    // sound tets bulge past the surface around the sample (BCN's knee with the barrier: a hex folded at
-    // a corner whose quadrature points all stay positive held a sample 0.7 mm in front of the nearest
-    // face, inside its dhat, reported 7.3 mm deep). A point pushed through a face lies in the sound
-    // elements behind it.
-    report.push_back({static_cast<int>(v), in_sound ? 1 : 0, std::sqrt(d2)});
+    // Told apart for the report only (the pair is made either way): a sample inside an element is
+    // through a face only where the surface encloses it (its winding number past 1). Where the mesh
+    // folds, elements overlap each other and the surface around them without any face having passed a
+    // point (BCN's knee with the barrier: a hex folded at a corner whose quadrature points all stay
+    // positive held a sample 0.7 mm in front of the nearest face, reported 7.3 mm deep). The volume
+    // test alone cannot tell: an element next to a fold is sound and still overlaps.
+    const double wn = winding_number(x, static_cast<int>(v));
+    report.push_back({static_cast<int>(v), wn > 1.0 + 1e-9 || wn < -1e-9 ? 1 : 0, std::sqrt(d2)});
   }
-  // Per sample over all ranks (each holds its own elements): through a face where some rank found it
-  // in a sound element, folded otherwise.
+  // Per sample over all ranks (each holds its own elements; every rank computes the same winding).
   std::vector<InsideSample> all = allgatherv(raw_comm(*system_.comm()), report);
   std::sort(all.begin(), all.end(), [](const InsideSample& a, const InsideSample& b) { return a.vertex < b.vertex; });
   for (std::size_t i = 0; i < all.size();) {
-    int in_sound = 0;
+    int crossed = 0;
     double depth = 0.0;
     const int v = all[i].vertex;
     for (; i < all.size() && all[i].vertex == v; ++i) {
-      in_sound = std::max(in_sound, all[i].in_sound);
+      crossed = std::max(crossed, all[i].crossed);
       depth = std::max(depth, all[i].depth);
     }
-    if (in_sound) {
+    if (crossed) {
       ++stats.crossed;
       stats.crossed_deepest = std::max(stats.crossed_deepest, depth);
     } else {
@@ -950,7 +941,7 @@ std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) co
                 totals.contacts, totals.penetration, step_.crossed_depth, totals.share(name()));
   std::string line = buf;
   if (step_.inside_folded > 0) {
-    std::snprintf(buf, sizeof buf, "; %lld more surface points inside elements folded over themselves (%.3g deep, no face crossed)",
+    std::snprintf(buf, sizeof buf, "; %lld more surface points inside elements where the mesh folds (%.3g deep, no face crossed)",
                   step_.inside_folded, step_.inside_depth);
     line += buf;
   }

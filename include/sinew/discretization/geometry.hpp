@@ -97,6 +97,19 @@ inline bool tet_barycentric(const Vec& p, const Vec& a, const Vec& b, const Vec&
   return true;
 }
 
+// The signed solid angle of triangle (a, b, c) seen from p (Van Oosterom and Strackee 1983):
+// tan(Omega / 2) = [a' b' c'] / (|a'||b'||c'| + (a'.b')|c'| + (a'.c')|b'| + (b'.c')|a'|), x' = x - p.
+// Positive where p lies behind the triangle's right-handed normal (inside an outward surface); 0 when p is
+// one of its corners. Summed over a closed surface and divided by 4 pi: the winding number of p.
+inline double solid_angle(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+  const Vec x = a - p, y = b - p, z = c - p;
+  const double lx = norm(x), ly = norm(y), lz = norm(z);
+  const double num = dot(x, cross(y, z));
+  const double den = lx * ly * lz + dot(x, y) * lz + dot(x, z) * ly + dot(y, z) * lx;
+  if (num == 0.0 && den == 0.0) return 0.0;
+  return 2.0 * std::atan2(num, den);
+}
+
 struct Box {
   Vec lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   void add(const Vec& p) {

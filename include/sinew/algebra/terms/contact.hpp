@@ -126,9 +126,10 @@ struct ContactDetection {
   long long added = 0;      // new pairs that push at once (inside, or nearer than the thickness), and refrozen ones
   long long raised = 0;     // multipliers raised for samples still behind their target (keep mode)
   double deepest = 0.0;     // the largest distance from a sample inside the volume to the surface
-  // The samples inside, each counted once over all ranks: those inside only elements folded over
-  // themselves (a tet of each turned inside out: the sample went through no face), and the others, the
-  // points through a face, with the deepest of them (the penetration a report gives).
+  // The samples inside, each counted once over all ranks: those the surface does not enclose (their
+  // winding number is in (0, 1): inside an element only where the mesh folds or overlaps itself, no face
+  // crossed), and the others, the points through a face, with the deepest of them (the penetration a
+  // report gives).
   long long folded = 0, crossed = 0;
   double crossed_deepest = 0.0;
   double seconds = 0.0;
@@ -268,6 +269,9 @@ class ContactTerm final : public EnergyTerm {
   // the deepest of the others over all ranks (collective).
   std::vector<Candidate> inside_candidates(const Positions& at, const std::vector<char>& paired,
                                            const std::vector<double>& carried, ContactDetection& stats) const;
+  // The winding number of the deformed surface (positions x) at its vertex v: in (0, 1) unless v went
+  // through a face.
+  double winding_number(const std::vector<geom::Vec>& x, int v) const;
   // Moves target triangle t and weights w of sample v to the closest deformed-surface point nearby.
   int refine_target(const std::vector<geom::Vec>& x, int v, int& t, double w[3], double& d2) const;
   void proximity_candidates(const Positions& at, const std::vector<char>& paired, const std::vector<double>& carried,
