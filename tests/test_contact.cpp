@@ -860,18 +860,29 @@ TEST(BarrierContact, TheTermHasTheGradientOfItsEnergyAndLimitsSteps) {
 // Each Newton iteration's row of newton.csv reports the longest step the barrier's collision test
 // allowed along its direction (step_bound, +inf where it allowed the line search's longest): pressing
 // two blocks together, some directions would carry the top's faces through the bottom's, and their
-// steps stop at or before that bound; no step goes past one.
-TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllows) {
+// steps stop at or before that bound; no step goes past one. The iteration after a step held short of
+// 1 by the bound assembles the projected Hessian (HessianPolicy: the exact one waits for a step that
+// was not held), also across the regroups of a load step.
+TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllowsAndAHeldStepIsFollowedByAProjectedOne) {
   const std::string dir = "test_results/contact_blocks_bound" + tag();
   Simulation sim(config(blocks_xml(0.4, true, 4, R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x"), dir),
                  RunOptions{true, ""});
   ASSERT_EQ(sim.run(), 0);
   const std::vector<std::string> steps = csv_column(dir + "/newton.csv", "step_length"),
-                                 bounds = csv_column(dir + "/newton.csv", "step_bound");
+                                 bounds = csv_column(dir + "/newton.csv", "step_bound"),
+                                 exact = csv_column(dir + "/newton.csv", "exact_hessian"),
+                                 load_step = csv_column(dir + "/newton.csv", "step");
   ASSERT_EQ(steps.size(), bounds.size());
-  int bounded = 0, at_bound = 0;
+  ASSERT_EQ(steps.size(), exact.size());
+  ASSERT_EQ(steps.size(), load_step.size());
+  int bounded = 0, at_bound = 0, after_held = 0, exact_rows = 0;
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const double step = std::stod(steps[i]), bound = std::stod(bounds[i]);
+    exact_rows += exact[i] == "1";
+    if (i > 0 && load_step[i] == load_step[i - 1] && std::stod(bounds[i - 1]) < 1.0) {
+      ++after_held;
+      EXPECT_EQ(exact[i], "0") << "row " << i + 1 << " follows a step held at " << bounds[i - 1];
+    }
     if (std::isinf(bound)) continue;
     ++bounded;
     EXPECT_GT(bound, 0.0);
@@ -881,8 +892,10 @@ TEST(BarrierContact, EachIterationReportsTheStepItsCollisionTestAllows) {
   EXPECT_GT(steps.size(), 4u);
   EXPECT_GT(bounded, 0);
   EXPECT_GT(at_bound, 0);
-  std::printf("  %zu Newton iterations, %d bounded by the collision test, %d of them stepped to the bound\n", steps.size(), bounded,
-              at_bound);
+  EXPECT_GT(after_held, 0);
+  EXPECT_GT(exact_rows, 0);
+  std::printf("  %zu Newton iterations, %d bounded by the collision test, %d of them stepped to the bound; %d after a held step, "
+              "%d exact\n", steps.size(), bounded, at_bound, after_held, exact_rows);
 }
 
 // With the barrier, every step starts from the tangent predictor (the linearised step from the last

@@ -514,6 +514,30 @@ TEST(HessianPolicy, AfterASaddleTriesAgainAfterFourThenEightProjectedIterations)
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
 }
 
+// Where the collision test held the last step short of 1, pairs are still closing and the exact Hessian
+// (whose barrier pairs have not yet met the faces they approach) gives no quadratic step: it waits for
+// a step that was not held, without counting as a fall-back.
+TEST(HessianPolicy, WaitsForAStepTheCollisionTestDidNotHold) {
+  HessianPolicy p(0.01, HessianPolicy::Inverted::PerPoint);
+  p.start(100.0);
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.0, false, true));  // small enough, but the last step was held
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::Projected);
+  EXPECT_FALSE(p.fell_back());
+  EXPECT_FALSE(p.exact_used());
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0, false, false));  // the next step was not held: Exact at once
+  EXPECT_TRUE(p.next_jacobian(0.3, 0.0, false, false));
+  EXPECT_FALSE(p.next_jacobian(0.3, 0.0, false, true));  // a held step in Exact mode: back to projection
+  EXPECT_FALSE(p.fell_back());
+  EXPECT_TRUE(p.next_jacobian(0.3, 0.0, false, false));
+  // In a fall-back the wait runs as before; a held step only keeps the exact Hessian from coming back.
+  p.step_taken(0.25);
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  EXPECT_FALSE(p.next_jacobian(0.3, 0.0, false, false));
+  EXPECT_FALSE(p.next_jacobian(0.3, 0.0, false, false));
+  EXPECT_FALSE(p.next_jacobian(0.3, 0.0, false, true));  // the wait of 2 is over, but this step was held
+  EXPECT_TRUE(p.next_jacobian(0.3, 0.0, false, false));
+}
+
 // forcing.hpp: the 969k stretch's third Newton iteration (|F| 1.48, eta 1e-2, threshold 1e-2) is asked
 // for half the threshold; far from it, past it, or below the floor the forcing term stands or is floored.
 TEST(FinishingTolerance, SolvesToHalfTheThresholdWithinOneDigitOfIt) {

@@ -356,6 +356,47 @@ TEST(Solve, AnExactSolveOverItsCGBudgetIsRedoneWithProjectionAndTheSolveConverge
                 c.newton_iterations, free.records.back().solve.newton_iterations);
 }
 
+namespace {
+// No energy, but a step limit that holds every other Newton step at 0.6 of the Newton step (as a
+// contact barrier's collision test holds steps where surface points close on faces).
+class HoldEveryOtherStep : public EnergyTerm {
+ public:
+  const char* name() const override { return "hold every other step"; }
+  void add(const TermInput&, TermOutput&) const override {}
+  bool limits_steps() const override { return true; }
+  double step_limit(const Vector&, const Vector&, double t_max) const override { return ++calls_ % 2 ? 0.6 : t_max; }
+
+ private:
+  mutable long calls_ = 0;
+};
+}  // namespace
+
+// HessianPolicy: after a step a term's limit held short of 1, the next Jacobian is the projected one,
+// even where the residual has fallen far enough for the exact one; after a step it did not hold, the
+// exact Hessian comes back at once. The solve converges to the state the plain twist reaches.
+TEST(Solve, AfterAStepATermHeldShortTheNextJacobianIsProjected) {
+  const std::string xml = twist_xml(1.0, 1);
+  LoadedScene plain(config(xml, "test_results/solve_held0" + tag()));
+  ASSERT_TRUE(plain.solver.solve(*plain.u).converged());
+  LoadedScene held(config(xml, "test_results/solve_held1" + tag()));
+  held.scene.system().add_term(std::make_shared<HoldEveryOtherStep>());
+  std::vector<NewtonIterate> its;
+  const SolveReport r = held.solver.solve(*held.u, [&](const NewtonIterate& it) { its.push_back(it); });
+  ASSERT_TRUE(r.converged()) << r.reason();
+  int after_held = 0, exact_after_free = 0;
+  for (std::size_t i = 1; i < its.size(); ++i) {
+    if (its[i - 1].step_bound < 1.0) {
+      EXPECT_FALSE(its[i].exact_hessian) << "iteration " << its[i].iteration << " follows a held step";
+      ++after_held;
+    } else {
+      exact_after_free += its[i].exact_hessian;
+    }
+  }
+  EXPECT_GT(after_held, 2);
+  EXPECT_GT(exact_after_free, 0);
+  EXPECT_LT(rel_diff(gather(*plain.u), gather(*held.u)), 1e-6);
+}
+
 TEST(Solve, AFailedSolveIsRetriedWithProjectionOnlyWhenTheExactHessianWasUsed) {
   // Three Newton iterations cannot converge a pi/2 twist. With the default switch (1% of the first
   // residual) the exact Hessian is never reached: no retry, 3 iterations. With an eager switch it is

@@ -27,8 +27,15 @@
 // tried again after 4, 8, 16, ... projected iterations (`saddle_wait`), and `saddle()` tells the line
 // search it may step further along a direction that keeps descending (EnergyBacktrack). A failed solve
 // is worth redoing with projection only when it used the exact Hessian at all.
+// Where a term's step limit (the contact barrier's collision test) held the last step short of 1,
+// surface points are still closing on faces whose barrier the Hessian does not see yet: the exact
+// Hessian waits for a step that was not held (no fall-back counted; a later solve of the same load step
+// goes on from the last one's). On huesitos' curl (quasi-static) only 23 of the 63 exact directions
+// that followed a held step were stepped along by 1/2 or more, against 192 of 259 after other steps;
+// waiting took the clip from 881 to 701 Newton iterations and ten corpus runs from 5,799 to 5,414
+// (docs/performance.md).
 //
-//   Projected <--(small residual, nothing tangled)--> Exact --(bad direction or short step)--> FellBack
+//   Projected <--(small residual, nothing tangled, last step not held)--> Exact --(bad direction or short step)--> FellBack
 //   FellBack --(residual 10x below the failure's, or after a short step 2^k projected iterations, or
 //               after a saddle 4 x 2^k)--> Exact
 #pragma once
@@ -82,7 +89,9 @@ class HessianPolicy {
   // inverted, and whether any point is undefined. Returns whether to assemble the exact Hessian. Until a
   // fall-back, the choice follows the current state (a residual that grows again, or a state that
   // tangles, goes back to projection).
-  bool next_jacobian(double residual, double inverted_fraction, bool undefined = false) {
+  // `held`: the last step was held short of 1 by a step limit (a contact barrier's collision test):
+  // the state is where pairs are still closing, so the exact Hessian waits for a step that was not held.
+  bool next_jacobian(double residual, double inverted_fraction, bool undefined = false, bool held = false) {
     const bool tangled =
         undefined || (inverted_ == Inverted::WholeMesh ? inverted_fraction > 0.0 : inverted_fraction > few);
     last_residual_ = residual;
@@ -91,7 +100,7 @@ class HessianPolicy {
       mode_ = Mode::Projected;  // far enough, or long enough: may try again
     if (mode_ == Mode::FellBack) ++projected_since_;
     if (mode_ != Mode::FellBack)
-      mode_ = exact_below_ > 0.0 && f0_ > 0.0 && residual < exact_below_ * f0_ && !tangled ? Mode::Exact : Mode::Projected;
+      mode_ = exact_below_ > 0.0 && f0_ > 0.0 && residual < exact_below_ * f0_ && !tangled && !held ? Mode::Exact : Mode::Projected;
     last_exact_ = mode_ == Mode::Exact;
     exact_used_ = exact_used_ || last_exact_;
     return last_exact_;
