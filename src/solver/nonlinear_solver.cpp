@@ -82,7 +82,9 @@ struct SolveState {
   // search is not Sinew's energy backtracking, which records it.
   double direction_max = 0.0;
   double step_bound = HUGE_VAL;  // the running iteration's bound on its step (NewtonIterate::step_bound)
-  bool last_step_held = false;   // the last step was held below 1 by a term's step limit (HessianPolicy)
+  // Whether the last step was held below 1 by a term's step limit (HessianPolicy): the solver's, kept
+  // across the solves of a load step (null: a tangent predictor's solve, which takes no steps).
+  bool* last_step_held = nullptr;
   ExactSolveBudget* exact_budget = nullptr;   // the solver's, kept across solves
   bool last_solve_converged = true;           // whether the last linear solve met its tolerance
   int exact_over_budget = 0;                  // exact solves over their CG budget, redone projected
@@ -266,7 +268,7 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     std::optional<Projection> projection;
     // Exact where the policy says, except at inverted points (see HessianPolicy).
     if (W && s.policy.next_jacobian(s.last_f_norm, static_cast<double>(s.last.inverted) / points_, s.last.undefined > 0,
-                                    s.last_step_held))
+                                    s.last_step_held && *s.last_step_held))
       projection = s.policy.exact_at_inverted() ? Projection::None : Projection::ExactUninvertedClamp;
     if (W && s.lift && !f)
       s.last = sys_.evaluate_lifted(*u, *s.lift, *s.lifted_force, *W, projection);
@@ -511,7 +513,7 @@ class ProgressObserver : public NOX::Observer {
     it.exact_hessian = model_.state().policy.last_exact();
     it.direction_max = model_.state().direction_max;
     it.step_bound = model_.state().step_bound;
-    model_.state().last_step_held = it.step_bound < 1.0;
+    if (bool* held = model_.state().last_step_held) *held = it.step_bound < 1.0;
     if (cb_) cb_(it);
     if (interrupt_ && interrupt_()) throw Interrupted();
   }
@@ -644,7 +646,7 @@ struct NonlinearSolver::Impl {
   unsigned pattern_version = 0;  // the system's pattern W was made on
   PreconditionerLag lag;
   ExactSolveBudget exact_budget;
-  bool step_held = false;  // the last solve's last step was held by a step limit (SolveState::last_step_held)
+  bool step_held = false;  // SolveState::last_step_held
 
   // A term asked for new couplings (contact): W on the new graph, and a preconditioner set up afresh.
   void follow_pattern() {
@@ -819,7 +821,8 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   const auto t0 = Clock::now();
   SolveState state{policy, &m.lag, nullptr, {}, 0.0, 0.0};
   state.exact_budget = &m.exact_budget;
-  state.last_step_held = reference > 0.0 && m.step_held;  // a later solve of the same load step goes on
+  if (!(reference > 0.0)) m.step_held = false;  // a load step's first solve; a later one goes on
+  state.last_step_held = &m.step_held;
   const int updates_before = m.lag.updates(), redos_before = m.lag.redos();
   m.follow_pattern();
   m.model->attach(&state);
@@ -873,7 +876,6 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     auto solver = NOX::Solver::buildSolver(group, tests, params);
     const NOX::StatusTest::StatusType status = solver->solve();
     report.newton_iterations = solver->getNumIterations();
-    m.step_held = state.last_step_held;
     if (auto stats = solver->getSolverStatistics())
       report.linear_iterations = stats->linearSolve.lastNonlinearSolve_NumLinearIterations;
     const auto& final_group = dynamic_cast<const NOX::Thyra::Group&>(solver->getSolutionGroup());
