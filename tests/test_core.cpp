@@ -538,6 +538,33 @@ TEST(HessianPolicy, WaitsForAStepTheCollisionTestDidNotHold) {
   EXPECT_TRUE(p.next_jacobian(0.3, 0.0, false, false));
 }
 
+// A step whose first |F| was small (the tangent predictor's guess, 20): the relative rule alone waits for
+// |F| < 0.2, the floor ('Exact Hessian within' times the |F| that ends the solve) allows it below 1 too;
+// it changes nothing else (tangles, held steps, fall-backs), and 'Exact Hessian below' 0 still projects.
+TEST(HessianPolicy, AlsoExactBelowAnAbsoluteFloorNearConvergence) {
+  HessianPolicy relative(0.01, HessianPolicy::Inverted::PerPoint);
+  relative.start(20.0);
+  EXPECT_FALSE(relative.next_jacobian(0.5, 0.0));
+  EXPECT_TRUE(relative.next_jacobian(0.15, 0.0));
+
+  HessianPolicy p(0.01, HessianPolicy::Inverted::PerPoint);
+  p.start(20.0);
+  p.set_exact_floor(1.0);
+  EXPECT_FALSE(p.next_jacobian(1.5, 0.0));        // above both
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));         // below the floor only
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.02));       // tangled: 2% inverted
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.0, false, true));  // the last step was held
+  EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+  p.step_taken(0.25);                              // a short exact step falls back as before
+  EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+  EXPECT_FALSE(p.next_jacobian(0.5, 0.0));
+
+  HessianPolicy never(0.0);
+  never.start(20.0);
+  never.set_exact_floor(1.0);
+  EXPECT_FALSE(never.next_jacobian(0.5, 0.0));
+}
+
 // forcing.hpp: the 969k stretch's third Newton iteration (|F| 1.48, eta 1e-2, threshold 1e-2) is asked
 // for half the threshold; far from it, past it, or below the floor the forcing term stands or is floored.
 TEST(FinishingTolerance, SolvesToHalfTheThresholdWithinOneDigitOfIt) {

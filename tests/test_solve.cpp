@@ -397,6 +397,38 @@ TEST(Solve, AfterAStepATermHeldShortTheNextJacobianIsProjected) {
   EXPECT_LT(rel_diff(gather(*plain.u), gather(*held.u)), 1e-6);
 }
 
+// 'Exact Hessian within': with the relative rule all but off ('Exact Hessian below' 1e-12), the exact
+// Hessian comes once |F| is below 'within' times the absolute tolerance (here 1e6 x 1e-9), at the first
+// iteration after that and from then on (nothing inverts in a 1 rad twist); with 0 Newton projects
+// throughout, converging linearly, so the floor saves iterations. Both reach the same state.
+TEST(Solve, TheExactHessianAlsoComesBelowAFloorNearTheConvergenceThreshold) {
+  const auto xml = [](const char* within) {
+    return twist_xml(1.0, 1, "hex8",
+                     std::string(R"x(<Parameter name="Exact Hessian below" type="double" value="1e-12"/><Parameter name="Exact Hessian within" type="double" value=")x") +
+                         within + "\"/>");
+  };
+  const double floor = 1e6 * 1e-9;
+  std::vector<NewtonIterate> off_its, on_its;
+  LoadedScene off(config(xml("0"), "test_results/solve_within0" + tag()));
+  const SolveReport r0 = off.solver.solve(*off.u, [&](const NewtonIterate& it) { off_its.push_back(it); });
+  LoadedScene on(config(xml("1e6"), "test_results/solve_within1" + tag()));
+  const SolveReport r1 = on.solver.solve(*on.u, [&](const NewtonIterate& it) { on_its.push_back(it); });
+  ASSERT_TRUE(r0.converged()) << r0.reason();
+  ASSERT_TRUE(r1.converged()) << r1.reason();
+  for (const auto& it : off_its) EXPECT_FALSE(it.exact_hessian) << "iteration " << it.iteration;
+  int exact = 0;
+  for (std::size_t i = 1; i < on_its.size(); ++i) {
+    EXPECT_EQ(on_its[i].exact_hessian, on_its[i - 1].residual < floor) << "iteration " << on_its[i].iteration;
+    exact += on_its[i].exact_hessian;
+  }
+  EXPECT_GT(exact, 0);
+  EXPECT_LT(r1.newton_iterations, r0.newton_iterations);
+  EXPECT_LT(rel_diff(gather(*off.u), gather(*on.u)), 1e-6);
+  if (world()->getRank() == 0)
+    std::printf("[ info ] Newton iterations: %d projected throughout, %d with the floor (%d exact)\n", r0.newton_iterations,
+                r1.newton_iterations, exact);
+}
+
 TEST(Solve, AFailedSolveIsRetriedWithProjectionOnlyWhenTheExactHessianWasUsed) {
   // Three Newton iterations cannot converge a pi/2 twist. With the default switch (1% of the first
   // residual) the exact Hessian is never reached: no retry, 3 iterations. With an eager switch it is

@@ -871,6 +871,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
 
     state.nox = params.get();  // NOX's Newton direction writes each linear solve's tolerance there
     state.threshold = std::max(p.absolute_tolerance, p.relative_tolerance * report.initial_residual);
+    state.policy.set_exact_floor(p.exact_within * state.threshold);
     state.tolerance_floor = p.linear_tolerance;
     m.lag.start();
     auto solver = NOX::Solver::buildSolver(group, tests, params);

@@ -3,7 +3,9 @@
 // The PSD-projected Hessian (the paper's safeguard, Sec. 4) gives a descent direction from any state,
 // inverted ones included, but wherever an element is non-convex it is not the true Hessian, which turns
 // Newton's final quadratic convergence linear. So: project until the residual has dropped below
-// `exact_below` times the solve's first residual, then use the exact Hessian; how inverted points take
+// `exact_below` times the solve's first residual, or below an absolute floor near the convergence
+// threshold (set_exact_floor: a step that starts near equilibrium would otherwise creep there with
+// projected steps), then use the exact Hessian; how inverted points take
 // part is `Inverted`: PerPoint (exact where J > 0, projected where J <= 0), Exact (their exact Hessian
 // too), both only while at most a few points are inverted (`few`, a fraction of all; a tangle of many
 // keeps the whole Hessian projected: with the exact Hessian a scrambled cube settled in a tangled
@@ -56,6 +58,9 @@ class HessianPolicy {
   bool exact_at_inverted() const { return inverted_ == Inverted::Exact; }
 
   double exact_below() const { return exact_below_; }
+  // Also exact once the residual is below `floor` (absolute), however large the solve's first residual
+  // was (0: the relative rule only). Set per solve to 'Exact Hessian within' times the |F| that ends it.
+  void set_exact_floor(double floor) { exact_floor_ = floor; }
   Mode mode() const { return mode_; }
   bool exact_used() const { return exact_used_; }
   bool last_exact() const { return last_exact_; }
@@ -99,8 +104,10 @@ class HessianPolicy {
     if (mode_ == Mode::FellBack && (residual < retry_below_ || (wait_ > 0 && projected_since_ >= wait_)))
       mode_ = Mode::Projected;  // far enough, or long enough: may try again
     if (mode_ == Mode::FellBack) ++projected_since_;
-    if (mode_ != Mode::FellBack)
-      mode_ = exact_below_ > 0.0 && f0_ > 0.0 && residual < exact_below_ * f0_ && !tangled && !held ? Mode::Exact : Mode::Projected;
+    if (mode_ != Mode::FellBack) {
+      const bool small = exact_below_ > 0.0 && ((f0_ > 0.0 && residual < exact_below_ * f0_) || residual < exact_floor_);
+      mode_ = small && !tangled && !held ? Mode::Exact : Mode::Projected;
+    }
     last_exact_ = mode_ == Mode::Exact;
     exact_used_ = exact_used_ || last_exact_;
     return last_exact_;
@@ -139,6 +146,7 @@ class HessianPolicy {
   }
 
   double exact_below_;
+  double exact_floor_ = 0.0;
   Inverted inverted_ = Inverted::PerPoint;
   double f0_ = 0.0;
   Mode mode_ = Mode::Projected;

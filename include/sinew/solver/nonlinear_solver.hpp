@@ -29,7 +29,7 @@ struct SolverParameters {
   enum class Rebuild { WhenNeeded, EveryStep };
   enum class Update { WhenNeeded, EveryNewtonIteration };
   enum class Inverted { Exact, PerPoint, WholeMesh };
-  double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0;
+  double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0, exact_within = 0.0;
   int max_iterations = 0, regroup_after = 0;
   LineSearch line_search = LineSearch::Backtrack;
   Merit merit = Merit::Energy;
@@ -138,6 +138,15 @@ struct SolverParameters {
             "use the unprojected Hessian once |F| < this times the step's first |F| and nothing is inverted "
             "(0: always project); a solve that fails after using it is redone with projection",
             Range::closed_open(0.0, 1.0));
+    // Default 1000, measured on the rig corpus (docs/performance.md): the relative rule alone leaves a step
+    // whose first |F| was small projected down to a fraction of it, where projected Newton creeps (on the
+    // corpus' logs, below 1000 times the tolerance an exact iteration lowered |F| by 0.44-0.58 decades,
+    // a projected one by 0.14-0.26; above it, no more); the corpus 5,414 -> 5,004 Newton iterations (its
+    // quasi-static runs -13.5%), 5,186 with 100; no shipped scene takes more.
+    v.entry("Exact Hessian within", exact_within, 1000.0,
+            "also use the unprojected Hessian (as 'Exact Hessian below' does) once |F| is below this many times "
+            "the |F| that ends the solve, however small the step's first |F| was (0: the relative rule only)",
+            Range::non_negative());
     // Default exact (with the retry after a failed exact step, hessian_policy.hpp), measured against per
     // point: scramble 444 -> 391 Newton iterations (both back to rest); the 48k-cell human's crouch,
     // steps 5 and 6 (85-143 points inverted at a crease): 43 -> 33 and over 80 -> 16; twist, drop,
