@@ -6,11 +6,20 @@ clip's end, quasi-static (one load step per frame at 24 fps) and with inertia (b
     perf/rig_corpus.py --sinew build/sinew --out results/perf/rigs [--only NAME,...] [--modes M,...] [--quick] [--check]
 
 Prints one line per run (frames done, Newton and CG per frame, seconds per frame, inverted points,
-deepest penetration, surface points inside elements where the mesh folds (no face crossed), volume change) and writes rigs.json and rigs.md in --out. --quick runs the
+deepest penetration, surface points inside elements where the mesh folds (no face crossed), volume change,
+and where the Newton iterations went: the share whose step the contact barrier's collision test held
+short, the share in the tail (|F| below 1000 times the tolerance), and the steps whose first guess it
+pulled back with their share; scripts/sinew-anatomy) and writes rigs.json and rigs.md in --out. --quick runs the
 first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
 frames with no inverted point at a quasi-static frame end, its deepest penetration below the contact
-thickness (0.05 cells) and its volume within 2% of the rest's."""
-import argparse, csv, json, os, subprocess, sys, time
+thickness (0.05 cells), its volume within 2% of the rest's, and newton.csv holding as many of the
+frames' Newton iterations as log.csv counts."""
+import argparse, csv, json, os, re, subprocess, sys, time
+from importlib.machinery import SourceFileLoader
+
+# scripts/sinew-anatomy: where each run's Newton iterations went (held by the collision test, the tail).
+anatomy = SourceFileLoader("sinew_anatomy", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts",
+                                                          "sinew-anatomy")).load_module()
 
 MODELS = "/usr/share/assimp/models"
 BCN = MODELS + "/X/BCN_Epileptic.X"
@@ -59,11 +68,32 @@ def scene(name, rig, clip, span, cell, extra, dynamic, frames, out, model=""):
 '''
 
 
-def summarize(log_csv, frames):
+def where_iterations_went(folder, rows, tolerance):
+    # The frames' Newton iterations by class (sinew-anatomy; the run-up's, step 0, left out), and whether
+    # newton.csv holds as many as log.csv counts.
+    if not os.path.exists(os.path.join(folder, "newton.csv")):
+        return {"held": 0, "tail": 0, "pulled_back_steps": 0, "pulled_back_iterations": 0, "newton_rows": 0}
+    a = anatomy.anatomy(folder, tolerance)
+    steps = {int(r["step"]) for r in rows}
+    per = {k: v for k, v in a["per_step"].items() if k in steps}
+    held = tail = 0
+    for row in csv.DictReader(open(os.path.join(folder, "newton.csv"))):
+        if int(row["step"]) in steps and int(row["iteration"]) > 0:
+            motion, _, phase = anatomy.classify(row, a["tail_below"])
+            held += motion == "held"
+            tail += phase == "tail"
+    pulled = [v for v in per.values() if v.get("first_guess", 1.0) < 1.0]
+    return {"held": held, "tail": tail, "pulled_back_steps": len(pulled),
+            "pulled_back_iterations": sum(v["iterations"] for v in pulled),
+            "newton_rows": sum(v["iterations"] for v in per.values())}
+
+
+def summarize(log_csv, frames, tolerance=1e-2):
     # One log row per frame: a quasi-static load step, or a time step at the default one substep.
     rows = list(csv.DictReader(open(log_csv))) if os.path.exists(log_csv) else []
     rows = [r for r in rows if int(r["step"]) > 0]
     done = len(rows)
+    went = where_iterations_went(os.path.dirname(log_csv), rows, tolerance)
     n = [int(r["newton_iterations"]) for r in rows] or [0]
     c = [int(r["cg_iterations"]) for r in rows] or [0]
     s = [float(r["seconds_total"]) for r in rows] or [0.0]
@@ -81,7 +111,13 @@ def summarize(log_csv, frames):
                                 for r in rows] or [0.0]),
         "folded_max": max([int(float(r.get("inside_folded") or 0)) for r in rows] or [0]),
         "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in rows] or [0.0]),
+        "newton_total": sum(n) if rows else 0,
+        **went,
     }
+
+
+def share(n, total):
+    return f"{100.0 * n / total:.0f}%" if total else "-"
 
 
 def main():
@@ -117,9 +153,11 @@ def main():
                     rc = subprocess.run([a.sinew, xml], stdout=log, stderr=subprocess.STDOUT, timeout=a.timeout).returncode
                 except subprocess.TimeoutExpired:
                     rc = "timeout"
-            r = summarize(os.path.join(out, "log.csv"), frames)
-            r.update({"clip": name, "mode": mode, "exit": rc, "wall": time.time() - t0, "cell": cell})
             text = open(os.path.join(a.out, f"{name}_{mode}.log")).read()
+            # The header's "converged when |F| < X": the tolerance the tail is measured against.
+            m = re.search(r"converged when \|F\| < ([0-9.eE+-]+)", text)
+            r = summarize(os.path.join(out, "log.csv"), frames, float(m.group(1)) if m else 1e-2)
+            r.update({"clip": name, "mode": mode, "exit": rc, "wall": time.time() - t0, "cell": cell})
             for line in text.splitlines():
                 if line.startswith("  mesh: "):
                     r["mesh"] = line[8:]
@@ -128,7 +166,9 @@ def main():
             results.append(r)
             print(f"{name:24s} {mode:12s} exit {rc!s:7s} frames {r['done']}/{frames}  Newton/frame {r['newton_avg']:.1f} "
                   f"(max {r['newton_max']})  CG/frame {r['cg_avg']:.0f}  s/frame {r['seconds_avg']:.2f}  inverted {r['inverted_max']}  "
-                  f"min J {r['min_J']:.3g}  penetration {r['penetration_max']:.3g}  in folds {r['folded_max']}  volume {100 * r['volume_change_max']:.2f}%", flush=True)
+                  f"min J {r['min_J']:.3g}  penetration {r['penetration_max']:.3g}  in folds {r['folded_max']}  volume {100 * r['volume_change_max']:.2f}%  "
+                  f"held {share(r['held'], r['newton_total'])}  tail {share(r['tail'], r['newton_total'])}  "
+                  f"pulled-back guesses {r['pulled_back_steps']} ({share(r['pulled_back_iterations'], r['newton_total'])})", flush=True)
     json.dump(results, open(os.path.join(a.out, "rigs.json"), "w"), indent=1)
     failed = []
     for r in results if a.check else []:
@@ -141,17 +181,20 @@ def main():
             failed.append(f"{what}: penetration {r['penetration_max']:.3g} not below the thickness {0.05 * r['cell']:.3g}")
         if not r["volume_change_max"] < 0.02:
             failed.append(f"{what}: volume changed by {100 * r['volume_change_max']:.2f}%")
+        if r["newton_rows"] != r["newton_total"]:
+            failed.append(f"{what}: newton.csv has {r['newton_rows']} Newton iterations of the frames, log.csv counts {r['newton_total']}")
     for f in failed:
         print("FAILED: " + f, file=sys.stderr)
     if failed:
         sys.exit(1)
     with open(os.path.join(a.out, "rigs.md"), "w") as md:
-        md.write("| clip | run | exit | frames | Newton/frame (max) | CG/frame | s/frame | inverted at frame ends | min J | deepest penetration | points in folded elements | volume change |\n")
-        md.write("|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+        md.write("| clip | run | exit | frames | Newton/frame (max) | CG/frame | s/frame | inverted at frame ends | min J | deepest penetration | points in folded elements | volume change | held by contact | tail | pulled-back guesses (their iterations) |\n")
+        md.write("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
         for r in results:
             md.write(f"| {r['clip']} | {r['mode']} | {r['exit']} | {r['done']}/{r['frames']} | {r['newton_avg']:.1f} ({r['newton_max']}) | "
                      f"{r['cg_avg']:.0f} | {r['seconds_avg']:.2f} | {r['inverted_max']} | {r['min_J']:.3g} | {r['penetration_max']:.3g} | "
-                     f"{r['folded_max']} | {100 * r['volume_change_max']:.2f}% |\n")
+                     f"{r['folded_max']} | {100 * r['volume_change_max']:.2f}% | {share(r['held'], r['newton_total'])} | "
+                     f"{share(r['tail'], r['newton_total'])} | {r['pulled_back_steps']} ({share(r['pulled_back_iterations'], r['newton_total'])}) |\n")
 
 
 if __name__ == "__main__":

@@ -26,6 +26,30 @@ echo "without contact:       $off"
 [[ $on1 == "step 12: 0 of "* ]] || { echo "FAIL: boundary nodes inside with contact (1 rank)"; exit 1; }
 [[ $on2 == "step 12: 0 of "* ]] || { echo "FAIL: boundary nodes inside with contact (2 ranks)"; exit 1; }
 [[ $off != "step 12: 0 of "* ]] || { echo "FAIL: the fold does not cross itself even without contact: the check proves nothing"; exit 1; }
+# log.csv's first_guess: the fraction of the way each step's first guess went, as the progress line
+# "first guess: X of the way" says where the collision test pulled it back (the barrier fold's step 12),
+# and 1 at every other step.
+for run in on1 on2; do
+  /usr/bin/python3 - "$out/$run/log.csv" "$out/$run.log" <<'PY'
+import csv, re, sys
+rows = {int(r["step"]): float(r["first_guess"]) for r in csv.DictReader(open(sys.argv[1])) if int(r["step"]) > 0}
+said, pending = {}, None
+for line in open(sys.argv[2]):  # printed just before the line of the step (or run-up step) it starts
+    m = re.match(r"\s+first guess: (\S+) of the way", line)
+    if m:
+        pending = float(m.group(1))
+    m = re.match(r"step (\d+)/", line)
+    if m:
+        if pending is not None:
+            said[int(m.group(1))] = pending
+        pending = None
+    if line.startswith("run-up"):
+        pending = None
+bad = [(k, v, said.get(k, 1.0)) for k, v in rows.items() if not (0.0 < v <= 1.0) or abs(v - said.get(k, 1.0)) > 5e-3 * said.get(k, 1.0)]
+print(f"{sys.argv[1]}: first guesses pulled back at steps {sorted(said)}, log.csv {[k for k, v in rows.items() if v < 1.0]}")
+sys.exit(1 if bad or not rows else 0)
+PY
+done
 /usr/bin/python3 - "$out/on1/step_000012.h5" "$out/on2/step_000012.h5" "$out/on1/mesh.h5" "$out/on2/mesh.h5" <<'PY'
 import sys, h5py, numpy as np
 a, b, ma, mb = (h5py.File(p) for p in sys.argv[1:5])

@@ -219,7 +219,7 @@ Simulation::StepOutcome Simulation::advance(int k, StepRecord& rec) {
     scene.system().begin_step(StepStart{at_.load, t, u_.get(), first_attempt && rec.cuts == 0});
     first_attempt = false;
     predicted = stepper_->begin(at_.load, t, *u_, *trial);
-    admit_guess(*trial);
+    rec.first_guess = admit_guess(*trial);
     if (talk_) {
       const double now = wall_seconds(), done = at_.load - start_load_, elapsed = now - started_;
       // The pace of the last two steps, not of the whole run: steps grow as a motion creases the
@@ -347,7 +347,7 @@ Simulation::StepOutcome Simulation::run_up() {
   return StepOutcome::Done;
 }
 
-void Simulation::admit_guess(Vector& trial) {
+double Simulation::admit_guess(Vector& trial) {
   // A contact barrier admits no guess whose path from the last state passes a surface point through a
   // face (System::admit_guess): the skinning guess of a crease is pulled back towards the last state.
   const double taken = scene_->system().admit_guess(*u_, trial);
@@ -355,6 +355,7 @@ void Simulation::admit_guess(Vector& trial) {
     std::printf("  first guess: %.3g of the way (the rest would pass the surface through itself)\n", taken);
     std::fflush(stdout);
   }
+  return taken;
 }
 
 SolveReport Simulation::solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress,

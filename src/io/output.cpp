@@ -295,7 +295,7 @@ Output::Output(const OutputParameters& params, const System& system, const std::
       std::string header =
           "step,load,cuts,newton_iterations,cg_iterations,initial_residual,final_residual,energy,volume_ratio,"
           "min_J,inverted_points,seconds_assembly,seconds_preconditioner,seconds_linear,seconds_line_search,"
-          "seconds_total,seconds_rounds,pattern_changes,time,kinetic_energy";
+          "seconds_total,seconds_rounds,pattern_changes,time,kinetic_energy,first_guess";
       for (const std::string& c : system.log_columns()) header += "," + c;
       open_csv(log_, dir_ + "/log.csv", restart_step, header);
       open_csv(newton_log_, dir_ + "/newton.csv", restart_step,
@@ -647,7 +647,7 @@ void Output::write_log_row(const StepRecord& r) {
        << s.linear_iterations << "," << s.initial_residual << "," << s.final_residual << "," << r.totals.energy << ","
        << r.volume_ratio << "," << r.totals.min_J << "," << r.totals.inverted << "," << s.seconds_assembly << ","
        << s.seconds_preconditioner << "," << s.seconds_linear << "," << s.seconds_line_search << "," << s.seconds_total
-       << "," << r.seconds_rounds << "," << r.pattern_changes << "," << r.time << "," << r.kinetic;
+       << "," << r.seconds_rounds << "," << r.pattern_changes << "," << r.time << "," << r.kinetic << "," << r.first_guess;
   for (double v : r.term_values) log_ << "," << v;
   log_ << "\n";
   log_.flush();

@@ -62,7 +62,8 @@ class Simulation {
   // Solves for the step's state from trial (its prescribed values set): rounds of the terms (System::round: contact's detection
   // and tractions) and solves until no term asks for another.
   // Pulls the step's first guess back where a term bounds the path to it (System::admit_guess).
-  void admit_guess(Vector& trial);
+  // Returns the fraction of the way taken (1: the whole guess).
+  double admit_guess(Vector& trial);
   SolveReport solve(Vector& trial, const std::function<void(const NewtonIterate&)>& progress, StepRecord& rec);
   void print_step(const StepRecord& rec) const;
   // Collective: the step file of the current state, with the terms' node fields and a velocity.

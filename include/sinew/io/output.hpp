@@ -82,6 +82,9 @@ struct StepRecord {
   double time = 0.0, kinetic = 0.0;
   double seconds_rounds = 0.0;  // in the terms' rounds between solves (contact detection)
   int pattern_changes = 0;      // times the matrix pattern grew for the terms' new couplings
+  // How far along its path the first guess of the step's converged attempt went (1: all the way; the
+  // contact barrier's collision test pulls a guess that would pass the surface through itself back).
+  double first_guess = 1.0;
   // The terms' columns of the log (System::log_columns): each term's energy share and its own values.
   std::vector<double> term_values;
 };
