@@ -73,19 +73,12 @@ def where_iterations_went(folder, rows, tolerance):
     # newton.csv holds as many as log.csv counts.
     if not os.path.exists(os.path.join(folder, "newton.csv")):
         return {"held": 0, "tail": 0, "pulled_back_steps": 0, "pulled_back_iterations": 0, "newton_rows": 0}
-    a = anatomy.anatomy(folder, tolerance)
     steps = {int(r["step"]) for r in rows}
-    per = {k: v for k, v in a["per_step"].items() if k in steps}
-    held = tail = 0
-    for row in csv.DictReader(open(os.path.join(folder, "newton.csv"))):
-        if int(row["step"]) in steps and int(row["iteration"]) > 0:
-            motion, _, phase = anatomy.classify(row, a["tail_below"])
-            held += motion == "held"
-            tail += phase == "tail"
-    pulled = [v for v in per.values() if v.get("first_guess", 1.0) < 1.0]
-    return {"held": held, "tail": tail, "pulled_back_steps": len(pulled),
+    per = [v for k, v in anatomy.anatomy(folder, tolerance)["per_step"].items() if k in steps]
+    pulled = [v for v in per if v.get("first_guess", 1.0) < 1.0]
+    return {"held": sum(v["held"] for v in per), "tail": sum(v["tail"] for v in per), "pulled_back_steps": len(pulled),
             "pulled_back_iterations": sum(v["iterations"] for v in pulled),
-            "newton_rows": sum(v["iterations"] for v in per.values())}
+            "newton_rows": sum(v["iterations"] for v in per)}
 
 
 def summarize(log_csv, frames, tolerance=1e-2):
