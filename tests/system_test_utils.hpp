@@ -88,7 +88,8 @@ inline void term_call(const System& sys, const Vector& u, Vector& uc, TermInput&
 }
 
 // One term's Hessian alone at u (no Dirichlet elimination), as a dense matrix.
-inline std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u) {
+inline std::vector<std::vector<double>> term_hessian(const System& sys, const EnergyTerm& term, const Vector& u,
+                                                     bool exact_terms = false) {
   auto K = sys.create_matrix();
   Vector uc(sys.column_dofs());
   K->resumeFill();
@@ -97,6 +98,7 @@ inline std::vector<std::vector<double>> term_hessian(const System& sys, const En
   TermOutput out;
   term_call(sys, u, uc, in, out);
   in.want_matrix = true;
+  in.exact_terms = exact_terms;
   out.matrix = K->getLocalMatrixDevice();
   term.add(in, out);
   K->fillComplete();
@@ -128,7 +130,7 @@ struct TermDerivativeCheck {
 };
 inline double min_eigenvalue(const std::vector<std::vector<double>>& A);
 inline TermDerivativeCheck check_term_derivatives(const System& sys, const EnergyTerm& term, const Vector& u, const Vector& d,
-                                                  double h = 1e-6) {
+                                                  double h = 1e-6, bool exact_terms = false) {
   TermDerivativeCheck r;
   auto f = sys.create_vector(), fp = sys.create_vector(), fm = sys.create_vector();
   auto up = sys.create_vector(), um = sys.create_vector();
@@ -137,7 +139,7 @@ inline TermDerivativeCheck check_term_derivatives(const System& sys, const Energ
   um->update(1.0, u, -h, d, 0.0);
   r.dE = (term_energy(sys, term, *up, fp.get()) - term_energy(sys, term, *um, fm.get())) / (2.0 * h);
   r.f_dot_d = f->dot(d);
-  const auto H = term_hessian(sys, term, u);
+  const auto H = term_hessian(sys, term, u, exact_terms);
   const auto dg = gather(d), fpg = gather(*fp), fmg = gather(*fm);
   for (std::size_t row = 0; row < H.size(); ++row) {
     double Hd = 0.0;

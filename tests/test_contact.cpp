@@ -857,6 +857,35 @@ TEST(BarrierContact, TheTermHasTheGradientOfItsEnergyAndLimitsSteps) {
   EXPECT_GT(kept, pulled);
 }
 
+// The barrier's pair Hessians are PSD projections, except where the solver asks for every term's exact
+// Hessian (TermInput::exact_terms, HessianPolicy's exact-terms tier): then the term's Hessian is the
+// derivative of its gradient, and indefinite (b' < 0 times the curvature of the distance), where the
+// projected one is PSD and differs from those differences.
+TEST(BarrierContact, AskedForTheExactHessianTheBarrierGivesTheDerivativeOfItsGradientUnprojected) {
+  System sys(world(), two_blocks(), snh());
+  ContactSettings cs = block_springs(0.2);
+  cs.barrier = true;
+  cs.thickness = 0.15;
+  auto contact = add_springs(sys, cs);
+  EXPECT_TRUE(sys.projects_hessians());
+  auto u = sys.create_vector();
+  press(sys, *u, 0.05);
+  contact->detect(*u);
+  sys.update_pattern();
+  auto d = sys.create_vector();
+  set_displacement(sys, *d, [&](const std::array<double, 3>&, int c, long long gid) { return hash_unit(gid, c, 11); });
+  const auto exact = check_term_derivatives(sys, *contact, *u, *d, 1e-7, true);
+  const auto projected = check_term_derivatives(sys, *contact, *u, *d, 1e-7, false);
+  EXPECT_GT(exact.scale, 0.0);
+  EXPECT_LT(exact.err, 1e-5 * exact.scale);
+  EXPECT_LT(exact.min_eigenvalue, -1e-6 * exact.max_entry);
+  EXPECT_GT(projected.min_eigenvalue, -1e-10 * projected.max_entry);
+  EXPECT_GT(projected.err, 1e-3 * projected.scale);
+  // Terms that project nothing do not offer the tier.
+  System plain(world(), two_blocks(), snh());
+  EXPECT_FALSE(plain.projects_hessians());
+}
+
 // Each Newton iteration's row of newton.csv reports the longest step the barrier's collision test
 // allowed along its direction (step_bound, +inf where it allowed the line search's longest): pressing
 // two blocks together, some directions would carry the top's faces through the bottom's, and their

@@ -398,6 +398,58 @@ TEST(HessianPolicy, EveryTransition) {
   EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
 }
 
+// The exact-terms tier (hessian_policy.hpp): off until an exact step is lengthened past long_step (a
+// full step is not enough), then every exact Jacobian drops the terms' projections too; a failure of
+// one of its directions (not descending, short, CG over budget, failed line search) goes back to the
+// exact tier, not to projection, for the rest of the solve; a new solve starts without it; and a policy
+// not offered the tier never uses it.
+TEST(HessianPolicy, ALengthenedExactStepTurnsOnTheTermsExactHessiansUntilOneOfTheirDirectionsFails) {
+  const double lengthened = HessianPolicy::long_step + 0.3;
+  for (bool offered : {false, true}) {
+    HessianPolicy p(0.01, HessianPolicy::Inverted::Exact);
+    p.set_exact_terms(offered);
+    for (int failure = 0; failure < 4; ++failure) {
+      p.start(100.0);
+      EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+      EXPECT_FALSE(p.last_exact_terms());
+      p.step_taken(1.0);  // a full step: not yet
+      EXPECT_TRUE(p.next_jacobian(0.4, 0.0));
+      EXPECT_FALSE(p.last_exact_terms());
+      p.step_taken(lengthened);
+      EXPECT_TRUE(p.next_jacobian(0.3, 0.0));
+      EXPECT_EQ(p.last_exact_terms(), offered);
+      p.step_taken(1.0);  // a good step keeps it
+      EXPECT_TRUE(p.next_jacobian(0.2, 0.0));
+      EXPECT_EQ(p.last_exact_terms(), offered);
+      if (!offered) break;
+      if (failure == 0) p.direction_not_descent();
+      if (failure == 1) p.step_taken(0.25);
+      if (failure == 2) p.exact_solve_over_budget();
+      if (failure == 3) p.line_search_failed();
+      EXPECT_EQ(p.mode(), HessianPolicy::Mode::Exact) << "failure " << failure;  // not FellBack
+      EXPECT_FALSE(p.fell_back());
+      EXPECT_TRUE(p.next_jacobian(0.2, 0.0));
+      EXPECT_FALSE(p.last_exact_terms());
+      p.step_taken(lengthened);  // no second try in this solve
+      EXPECT_TRUE(p.next_jacobian(0.1, 0.0));
+      EXPECT_FALSE(p.last_exact_terms());
+      p.step_taken(0.25);  // and the exact tier's own failure falls back as before
+      EXPECT_EQ(p.mode(), HessianPolicy::Mode::FellBack);
+    }
+    p.start(100.0);  // a new solve: off until a lengthened step
+    EXPECT_TRUE(p.next_jacobian(0.5, 0.0));
+    EXPECT_FALSE(p.last_exact_terms());
+  }
+  // A projected step lengthened by the line search does not count.
+  HessianPolicy q(0.01, HessianPolicy::Inverted::Exact);
+  q.set_exact_terms(true);
+  q.start(100.0);
+  EXPECT_FALSE(q.next_jacobian(50.0, 0.0));
+  q.step_taken(lengthened);
+  EXPECT_TRUE(q.next_jacobian(0.5, 0.0));
+  EXPECT_FALSE(q.last_exact_terms());
+}
+
 // Projected Newton near a crease converges linearly, so after a short exact step the exact Hessian is
 // tried again after 2, 4, 8, ... projected iterations even where the residual has not dropped ten-fold;
 // after a direction that does not descend only the ten-fold drop counts.

@@ -72,7 +72,8 @@ void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& ener
   // E = kappa b(d^2), kappa = k A / dhat^2 (k the stiffness, a traction per length; A the sample's
   // area): at half its dhat a pair pushes with 4.3 k A dhat, where a spring compressed by half the
   // thickness pushes with k A dhat / 2. The Hessian kappa (b'' grad D grad D^T + b' hess D) is projected
-  // to PSD per pair (its 12 x 12 eigen-system).
+  // to PSD per pair (its 12 x 12 eigen-system), except in the solver's exact-terms tier (b' < 0: the
+  // projection stiffens the directions along which the surfaces slide, HessianPolicy).
   const auto u = in.u;
   const auto f = out.force;
   const auto A = out.matrix;
@@ -103,7 +104,7 @@ void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& ener
     if (in.want_matrix) {
       for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 12; ++j) H[i * 12 + j] = kappa * (b.d2 * D.grad[i] * D.grad[j] + b.d1 * D.hess[i * 12 + j]);
-      barrier::project_psd(H);
+      if (!in.exact_terms) barrier::project_psd(H);
     }
     for (int j = 0; j < 4; ++j) {
       if (p.col[j] >= owned_dofs) continue;  // not a row of this rank

@@ -262,6 +262,10 @@ bool System::linearisable() const {
   return std::all_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->linearisable(); });
 }
 
+bool System::projects_hessians() const {
+  return std::any_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->projects_hessian(); });
+}
+
 bool System::limits_steps() const {
   return std::any_of(terms_.begin(), terms_.end(), [](const auto& t) { return t->limits_steps(); });
 }
@@ -490,13 +494,13 @@ void System::set_external_loads(const std::array<double, 3>& f, const std::array
 }
 
 EvaluationTotals System::evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend,
-                                  std::optional<Projection> projection) const {
-  return run(u, force, K, backend, projection, {});
+                                  std::optional<Projection> projection, bool exact_terms) const {
+  return run(u, force, K, backend, projection, {}, nullptr, true, exact_terms);
 }
 
 EvaluationTotals System::evaluate_lifted(const Vector& u, const Vector& d, Vector& force, CrsMatrix& K,
-                                         std::optional<Projection> projection) const {
-  const EvaluationTotals t = run(u, &force, &K, Backend::Default, projection, {}, nullptr, false);
+                                         std::optional<Projection> projection, bool exact_terms) const {
+  const EvaluationTotals t = run(u, &force, &K, Backend::Default, projection, {}, nullptr, false, exact_terms);
   // K still couples the prescribed DOFs here: f + K d is the force linearised along the increment.
   K.apply(d, force, Teuchos::NO_TRANS, 1.0, 1.0);
   K.resumeFill();
@@ -592,7 +596,8 @@ void System::gradient(const Vector& u, Vector& force, const EnergyTerm* only) co
 }
 
 EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
-                             ElementFields<DeviceMemory> fields, const EnergyTerm* only, bool eliminate) const {
+                             ElementFields<DeviceMemory> fields, const EnergyTerm* only, bool eliminate,
+                             bool exact_terms) const {
   if (K && K->getCrsGraph().get() != graph_.get() && !(only == elastic_.get() && K->getCrsGraph().get() == mesh_graph_.get()))
     throw std::logic_error("System::evaluate: the matrix was made before the pattern changed (create_matrix again)");
   u_columns_->doImport(u, *column_importer_, Tpetra::INSERT);
@@ -612,6 +617,7 @@ EvaluationTotals System::run(const Vector& u, Vector* force, CrsMatrix* K, Backe
     in.want_matrix = K != nullptr;
     in.backend = backend;
     in.projection = projection;
+    in.exact_terms = exact_terms;
     Kokkos::View<double**, Kokkos::LayoutLeft, Vector::device_type> f_view;
     if (force) {
       f_view = force->getLocalViewDevice(Tpetra::Access::ReadWrite);

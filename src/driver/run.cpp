@@ -288,7 +288,7 @@ std::function<void(const NewtonIterate&)> Simulation::newton_progress(int step, 
     if (std::isfinite(it.direction_max)) std::snprintf(du, sizeof du, "  |du| %.2e", it.direction_max);
     if (std::isfinite(it.step_bound)) std::snprintf(bound, sizeof bound, " (bound %.3g)", it.step_bound);
     std::printf("  newton %3d  |F| = %.3e  CG %4d  step %.3g%s%s%s\n", it.iteration, it.residual, it.linear_iterations, it.step, bound, du,
-                it.exact_hessian ? "  (exact Hessian)" : "");
+                it.exact_terms ? "  (exact Hessian, every term)" : it.exact_hessian ? "  (exact Hessian)" : "");
     std::fflush(stdout);
   };
 }

@@ -624,7 +624,7 @@ void Output::write_xdmf() const {
 void Output::log_newton(int step, double load, const NewtonIterate& it) {
   if (!root_) return;
   newton_log_ << std::setprecision(10) << step << "," << load << "," << it.iteration << "," << it.residual << ","
-              << it.linear_iterations << "," << it.step << "," << (it.exact_hessian ? 1 : 0) << "," << it.direction_max
+              << it.linear_iterations << "," << it.step << "," << (it.exact_terms ? 2 : it.exact_hessian ? 1 : 0) << "," << it.direction_max
               << "," << it.step_bound << "\n";
   newton_log_.flush();
 }

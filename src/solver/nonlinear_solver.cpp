@@ -271,9 +271,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
                                     s.last_step_held && *s.last_step_held))
       projection = s.policy.exact_at_inverted() ? Projection::None : Projection::ExactUninvertedClamp;
     if (W && s.lift && !f)
-      s.last = sys_.evaluate_lifted(*u, *s.lift, *s.lifted_force, *W, projection);
+      s.last = sys_.evaluate_lifted(*u, *s.lift, *s.lifted_force, *W, projection, W && s.policy.last_exact_terms());
     else
-      s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection);
+      s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection, W && s.policy.last_exact_terms());
     if (f) s.last_f_norm = f->norm2();
     s.seconds_assembly += since(t0);
   }
@@ -370,7 +370,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       return stay(true);
     }
     if (!(slope < 0.0)) {
-      const bool retry = state.policy.last_exact();
+      const bool retry = state.policy.last_exact() || state.policy.last_exact_terms();
       state.policy.direction_not_descent();
       return stay(retry);
     }
@@ -511,6 +511,7 @@ class ProgressObserver : public NOX::Observer {
     if (PreconditionerLag* lag = model_.state().lag) lag->stepped(it.step, it.residual);
     if (auto stats = solver.getSolverStatistics()) it.linear_iterations = stats->linearSolve.lastLinearSolve_NumIterations;
     it.exact_hessian = model_.state().policy.last_exact();
+    it.exact_terms = model_.state().policy.last_exact_terms();
     it.direction_max = model_.state().direction_max;
     it.step_bound = model_.state().step_bound;
     if (bool* held = model_.state().last_step_held) *held = it.step_bound < 1.0;
@@ -853,6 +854,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
     group->computeF();
     report.initial_residual = group->getNormF();
     state.policy.start(std::max(reference, report.initial_residual));  // reference 0: this solve's own
+    state.policy.set_exact_terms(p.exact_terms == SolverParameters::ExactTerms::AfterLongStep && m.sys.projects_hessians());
     auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
     auto converged = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
     // Unscaled: the plain L2 norm of the force residual, as the paper's criterion (NOX scales by

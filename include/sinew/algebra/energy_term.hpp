@@ -109,6 +109,9 @@ struct TermInput {
   bool want_force = false, want_matrix = false;
   Backend backend = Backend::Default;
   std::optional<Projection> projection;  // the elastic Hessian's projection for all laws, when given
+  // Every term its exact Hessian, indefinite parts included (a barrier's per-pair projection off): the
+  // solver's last tier near convergence (HessianPolicy).
+  bool exact_terms = false;
 };
 
 // What every term adds into: rows [0, owned_dofs) of the force (dE/du) and of the matrix (its columns
@@ -173,6 +176,9 @@ class EnergyTerm {
   // all s in [0, t] (owned DOFs; collective). The line search starts no longer, and a step's first
   // guess is pulled back to it.
   virtual bool limits_steps() const { return false; }
+  // Whether the term's Hessian is a PSD projection of its exact one, which it drops when asked
+  // (TermInput::exact_terms): the solver's exact-terms tier is offered only then.
+  virtual bool projects_hessian() const { return false; }
   virtual double step_limit(const Vector& u, const Vector& du, double t_max) const {
     (void)u;
     (void)du;

@@ -129,6 +129,7 @@ class System {
   // Some term bounds the steps (EnergyTerm::limits_steps), and the bound along du from u: the smallest
   // of the terms' (t_max when none). Collective.
   bool limits_steps() const;
+  bool projects_hessians() const;  // some term's Hessian is a projection it can drop (EnergyTerm::projects_hessian)
   double step_limit(const Vector& u, const Vector& du, double t_max) const;
   // Pulls a step's first guess back towards u (owned DOFs) where some term bounds the path from u to
   // it: the free DOFs to 0.9 of the admissible fraction, the Dirichlet ones left where the guess has
@@ -153,16 +154,17 @@ class System {
   unsigned pattern_version() const { return pattern_version_; }
 
   // Energy, gradient (force = dE/du, zero in Dirichlet rows) and Hessian (each elastic law projected as
-  // it says, or as `projection` says for all when given; the other terms' Hessians are PSD; Dirichlet
+  // it says, or as `projection` says for all when given; the other terms' Hessians are PSD, or with
+  // `exact_terms` exact (TermInput::exact_terms); Dirichlet
   // rows and columns eliminated). force and K may be null. u holds total displacements (owned DOFs).
   EvaluationTotals evaluate(const Vector& u, Vector* force, CrsMatrix* K, Backend backend = Backend::Default,
-                            std::optional<Projection> projection = std::nullopt) const;
+                            std::optional<Projection> projection = std::nullopt, bool exact_terms = false) const;
 
   // For an increment d (of prescribed and free DOFs alike): force = f(u) + K(u) d in the free rows, zero
   // in the Dirichlet ones, and K as evaluate() leaves it. The right-hand side of the linearised response
   // to a new prescribed motion (a load step's tangent predictor).
   EvaluationTotals evaluate_lifted(const Vector& u, const Vector& d, Vector& force, CrsMatrix& K,
-                                   std::optional<Projection> projection = std::nullopt) const;
+                                   std::optional<Projection> projection = std::nullopt, bool exact_terms = false) const;
 
   // The gradient with no Dirichlet elimination, of every term or of one: at an equilibrium its
   // prescribed rows are the reactions, and one term's part is the force that term exerts (e.g. the
@@ -196,7 +198,8 @@ class System {
   void build_graph();
   void compute_nodal_weights();
   EvaluationTotals run(const Vector& u, Vector* force, CrsMatrix* K, Backend backend, std::optional<Projection> projection,
-                       ElementFields<DeviceMemory> fields, const EnergyTerm* only = nullptr, bool eliminate = true) const;
+                       ElementFields<DeviceMemory> fields, const EnergyTerm* only = nullptr, bool eliminate = true,
+                       bool exact_terms = false) const;
   // Rows and columns of Dirichlet DOFs: off-diagonal entries zeroed, the diagonal kept (the sum of the
   // elements' own diagonal entries, a positive scale matching the stiffness, so CG sees a well-conditioned
   // identity-like block there); their force entries zeroed.

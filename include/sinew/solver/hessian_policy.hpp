@@ -37,7 +37,24 @@
 // waiting took the clip from 881 to 701 Newton iterations and ten corpus runs from 5,799 to 5,414
 // (docs/performance.md).
 //
+// The exact tier has the elastic energy's exact Hessian, but the other terms keep their PSD projections:
+// a contact barrier's pair Hessian kappa (b'' grad D grad D^T + b' hess D) is indefinite (b' < 0), and
+// its projection clamps the curvature along which the pair's surfaces slide on each other. Where the
+// flesh is soft against it Newton then converges linearly: on BCN_Epileptic's clip (step 34, 1,138
+// pairs) the exact Hessian's curvature along the Newton directions was 1.8e-5 where the energy's was
+// 8.5e-6 (the barrier's 6.9e-6 against -2.4e-6, measured by differences of the gradient), so the line
+// search lengthened every step to 1.7-2.0 Newton steps and |F| fell by 0.8-0.97 per iteration for 25
+// iterations. Such a lengthened exact step is the sign: after one (past long_step), the exact-terms
+// tier also drops the other terms' projections (EnergyTerm: TermInput::exact_terms), until one of its
+// directions fails as an exact one can (it does not descend, its CG runs over budget, its step is short
+// or the line search fails), which goes back to the exact tier, not to projection, for the rest of the
+// solve. Measured on the quasi-static corpus (1 thread, Newton iterations): BCN's clip 872 -> 794, the
+// jump 480 -> 461, huesitos 700 -> 695. Turned on by every exact step of full length instead, BCN 769
+// but huesitos 797 and the dynamic Wuson run 296 -> 309 (directions of the total exact Hessian that
+// fail cost a redone iteration each); keeping a failure for the whole load step, BCN 833.
+//
 //   Projected <--(small residual, nothing tangled, last step not held)--> Exact --(bad direction or short step)--> FellBack
+//   Exact --(a step lengthened past long_step)--> Exact with the terms' exact Hessians --(a failure)--> Exact
 //   FellBack --(residual 10x below the failure's, or after a short step 2^k projected iterations, or
 //               after a saddle 4 x 2^k)--> Exact
 #pragma once
@@ -64,6 +81,10 @@ class HessianPolicy {
   Mode mode() const { return mode_; }
   bool exact_used() const { return exact_used_; }
   bool last_exact() const { return last_exact_; }
+  // The exact-terms tier (see the top of this file): on or off for the solves to come.
+  void set_exact_terms(bool on) { exact_terms_ = on; }
+  // Whether the last exact Jacobian has the other terms' unprojected Hessians too.
+  bool last_exact_terms() const { return last_exact_terms_; }
   // Whether this solve fell back from the exact Hessian at least once (it may have tried it again since).
   bool fell_back() const { return fell_back_; }
   // Whether an exact direction of this solve did not descend at a state with no inverted point.
@@ -77,6 +98,7 @@ class HessianPolicy {
     retry_below_ = 0.0;
     saddle_ = false;
     short_falls_ = saddle_falls_ = wait_ = projected_since_ = 0;
+    last_exact_terms_ = terms_fell_ = lengthened_ = false;
   }
 
   // After the k-th short step or failed line search of a solve (k = 0, 1, ...), the exact Hessian is
@@ -89,6 +111,10 @@ class HessianPolicy {
 
   // The largest fraction of inverted points that still allows the exact Hessian (PerPoint, Exact).
   static constexpr double few = 0.01;
+
+  // An exact step the line search lengthened past this many Newton steps (the energy softer along its
+  // direction than the Hessian says) turns the exact-terms tier on.
+  static constexpr double long_step = 1.2;
 
   // Before each Jacobian: the residual of the current state, the fraction of its points that are
   // inverted, and whether any point is undefined. Returns whether to assemble the exact Hessian. Until a
@@ -109,6 +135,7 @@ class HessianPolicy {
       mode_ = small && !tangled && !held ? Mode::Exact : Mode::Projected;
     }
     last_exact_ = mode_ == Mode::Exact;
+    last_exact_terms_ = last_exact_ && exact_terms_ && lengthened_ && !terms_fell_;
     exact_used_ = exact_used_ || last_exact_;
     return last_exact_;
   }
@@ -116,6 +143,7 @@ class HessianPolicy {
   // The line search's findings about a direction computed from the last Jacobian.
   // With nothing inverted it is a saddle, retried by count; with inverted points the ten-fold drop only.
   void direction_not_descent() {
+    if (terms_fall()) return;
     if (last_exact_ && !(last_inverted_ > 0.0)) {
       saddle_ = true;
       fall_back(saddle_wait, &saddle_falls_);
@@ -124,16 +152,30 @@ class HessianPolicy {
     }
   }
   void step_taken(double step) {
+    if (step < 0.5 && terms_fall()) return;
     if (step < 0.5) fall_back(first_wait, &short_falls_);
+    if (last_exact_ && !last_exact_terms_ && step > long_step) lengthened_ = true;
   }
-  void line_search_failed() { fall_back(first_wait, &short_falls_); }
+  void line_search_failed() {
+    if (!terms_fall()) fall_back(first_wait, &short_falls_);
+  }
   // An exact solve that did not converge within its CG budget (ExactSolveBudget): as a short step.
-  void exact_solve_over_budget() { fall_back(first_wait, &short_falls_); }
+  void exact_solve_over_budget() {
+    if (!terms_fall()) fall_back(first_wait, &short_falls_);
+  }
 
   // Redo a failed solve with projection throughout?
   bool retry_projected() const { return exact_used_; }
 
  private:
+  // A failure of the exact-terms tier goes back to the exact tier (the terms projected) for the rest of
+  // the solve, not to projection. Returns whether it was that tier's.
+  bool terms_fall() {
+    if (!last_exact_terms_) return false;
+    terms_fell_ = true;
+    return true;
+  }
+
   // From an exact Jacobian: FellBack until the ten-fold drop, or after first * 2^k projected Jacobians
   // where `falls` counts k (and is counted up); no count (null) waits for the drop only.
   void fall_back(int first, int* falls) {
@@ -154,6 +196,8 @@ class HessianPolicy {
   // After a short step or a saddle: FellBack for wait_ projected Jacobians at most (0: until retry_below_).
   int short_falls_ = 0, saddle_falls_ = 0, wait_ = 0, projected_since_ = 0;
   double last_residual_ = 0.0, last_inverted_ = 0.0, retry_below_ = 0.0;  // FellBack until the residual is below retry_below_
+  // The exact-terms tier: offered, last used, failed in this solve, and an exact step lengthened.
+  bool exact_terms_ = false, last_exact_terms_ = false, terms_fell_ = false, lengthened_ = false;
 };
 
 }  // namespace sinew

@@ -29,6 +29,7 @@ struct SolverParameters {
   enum class Rebuild { WhenNeeded, EveryStep };
   enum class Update { WhenNeeded, EveryNewtonIteration };
   enum class Inverted { Exact, PerPoint, WholeMesh };
+  enum class ExactTerms { Never, AfterLongStep };
   double absolute_tolerance = 0.0, relative_tolerance = 0.0, linear_tolerance = 0.0, exact_below = 0.0, exact_within = 0.0;
   int max_iterations = 0, regroup_after = 0;
   LineSearch line_search = LineSearch::Backtrack;
@@ -39,6 +40,7 @@ struct SolverParameters {
   Rebuild rebuild = Rebuild::WhenNeeded;
   Update update = Update::WhenNeeded;
   Inverted inverted = Inverted::Exact;
+  ExactTerms exact_terms = ExactTerms::AfterLongStep;
   double rebuild_factor = 0.0, update_factor = 0.0, max_step = 0.0, node_relaxation = 0.0;
   bool verbose = false;
   Teuchos::ParameterList nox, stratimikos;
@@ -158,6 +160,14 @@ struct SolverParameters {
              "per point (exact where J > 0, the law's projection where J <= 0: Newton then converges linearly, "
              "0.85 per iteration with 85 inverted points on the 48k-cell human), or whole mesh (projected "
              "everywhere while any point is inverted)");
+    // Default 'after a long step', measured against 'never' (hessian_policy.hpp; docs/performance.md).
+    v.choice("Exact term Hessians", exact_terms, ExactTerms::AfterLongStep,
+             Choices<ExactTerms>{{"never", ExactTerms::Never}, {"after a long step", ExactTerms::AfterLongStep}},
+             "while the exact Hessian is in use: after an exact step that the energy line search lengthened past "
+             "1.2 Newton steps (the energy softer along it than the Hessian says), also the other terms' "
+             "unprojected Hessians (a contact barrier's pairs: their PSD projection stiffens the directions along "
+             "which surfaces slide on each other), until a direction from them fails, which goes back to the "
+             "terms' projections for the rest of the solve; or never");
     v.entry("Verbose", verbose, false, "print NOX's own iteration output");
     v.raw("NOX", nox, "raw NOX parameters laid over Sinew's defaults");
     v.raw("Stratimikos", stratimikos, "raw Stratimikos (Belos, MueLu) parameters laid over Sinew's defaults");

@@ -25,6 +25,7 @@ struct NewtonIterate {
   double step = 0.0;      // line-search step length
   int linear_iterations = 0;
   bool exact_hessian = false;  // the iteration's direction came from the unprojected Hessian
+  bool exact_terms = false;    // ... with every term's unprojected too (HessianPolicy's exact_terms tier)
   // The largest entry of the iteration's Newton direction (before the line search scales it): how far
   // the full step would move a node along one axis, in length units. Where |F| stalls, a direction that
   // stays large says Newton is still travelling (a crawl or a slide), one that shrinks says it is close.
