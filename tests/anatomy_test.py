@@ -17,7 +17,7 @@ ROWS = [
     (1, 500.0, 1.0, 0, "inf", "full, projected, opening"),
     (1, 50.0, 0.6, 0, "inf", "full, projected, opening"),
     (1, 5.0, 1.0, 1, "inf", "full, exact, tail"),
-    (1, 0.5, 2.0, 1, "inf", "full, exact, tail"),
+    (1, 0.5, 2.0, 2, "inf", "full, exact, tail"),   # 2: exact with every term's Hessian unprojected
     (2, 800.0, 0.25, 0, "0.25", "held, projected, opening"),   # at its bound
     (2, 700.0, 0.125, 0, "0.25", "held, projected, opening"),  # backtracked below its bound: still held
     (2, 9.0, 0.05, 1, "0.1", "held, exact, tail"),
