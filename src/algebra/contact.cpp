@@ -217,7 +217,7 @@ bool ContactTerm::allows_node_relaxation(std::vector<char>& held) const {
   for (const Pair& p : pairs_)
     for (int j = 0; j < 4; ++j)
       if (p.col[j] >= 0 && static_cast<std::size_t>(p.col[j] / 3) < held.size()) held[static_cast<std::size_t>(p.col[j] / 3)] = 1;
-  if (!colliders_.empty() || (settings_.self && settings_.barrier))  // (a barrier: any sample may come near any face)
+  if (!colliders_.empty() || self_barrier())  // (a barrier: any sample may come near any face)
     for (int n : owned_samples_) held[static_cast<std::size_t>(n)] = 1;
   return true;
 }

@@ -270,10 +270,11 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     if (W && s.policy.next_jacobian(s.last_f_norm, static_cast<double>(s.last.inverted) / points_, s.last.undefined > 0,
                                     s.last_step_held && *s.last_step_held))
       projection = s.policy.exact_at_inverted() ? Projection::None : Projection::ExactUninvertedClamp;
+    const bool exact_terms = W && s.policy.last_exact_terms();
     if (W && s.lift && !f)
-      s.last = sys_.evaluate_lifted(*u, *s.lift, *s.lifted_force, *W, projection, W && s.policy.last_exact_terms());
+      s.last = sys_.evaluate_lifted(*u, *s.lift, *s.lifted_force, *W, projection, exact_terms);
     else
-      s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection, W && s.policy.last_exact_terms());
+      s.last = sys_.evaluate(*u, f.get(), W.get(), Backend::Default, projection, exact_terms);
     if (f) s.last_f_norm = f->norm2();
     s.seconds_assembly += since(t0);
   }
@@ -370,7 +371,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       return stay(true);
     }
     if (!(slope < 0.0)) {
-      const bool retry = state.policy.last_exact() || state.policy.last_exact_terms();
+      const bool retry = state.policy.last_exact();
       state.policy.direction_not_descent();
       return stay(retry);
     }

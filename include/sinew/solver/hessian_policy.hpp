@@ -152,8 +152,7 @@ class HessianPolicy {
     }
   }
   void step_taken(double step) {
-    if (step < 0.5 && terms_fall()) return;
-    if (step < 0.5) fall_back(first_wait, &short_falls_);
+    if (step < 0.5 && !terms_fall()) fall_back(first_wait, &short_falls_);
     if (last_exact_ && !last_exact_terms_ && step > long_step) lengthened_ = true;
   }
   void line_search_failed() {

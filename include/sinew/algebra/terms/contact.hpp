@@ -167,8 +167,8 @@ class ContactTerm final : public EnergyTerm {
   bool allows_node_relaxation(std::vector<char>& held) const override;
   // With the barrier: the largest step along du from u (at most t_max) after which no surface vertex has
   // passed through a triangle (additive CCD over every vertex-triangle pair whose swept boxes meet).
-  bool limits_steps() const override { return settings_.self && settings_.barrier; }
-  bool projects_hessian() const override { return settings_.self && settings_.barrier; }
+  bool limits_steps() const override { return self_barrier(); }
+  bool projects_hessian() const override { return self_barrier(); }
   double step_limit(const Vector& u, const Vector& du, double t_max) const override;
   // The surface vertices whose path to the guess passes through a face (or a face through them), and
   // the vertices of those faces, are pulled back to 0.9 of the pair's admissible fraction; the rest of
@@ -236,6 +236,9 @@ class ContactTerm final : public EnergyTerm {
   const std::vector<Pair>& pairs() const { return pairs_; }
 
  private:
+  // Self contact by the barrier (not springs): its step limit, its projected pair Hessians.
+  bool self_barrier() const { return settings_.self && settings_.barrier; }
+
   const System& system_;
   ContactSettings settings_;
   std::vector<ColliderShape> colliders_;
