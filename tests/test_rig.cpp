@@ -488,12 +488,12 @@ TEST(RigScene, BonesComeFromTheSkinWeightsAndLeaveTheFleshAroundEachJointFree) {
     EXPECT_EQ(j.bone, bone_index.count(j.name) == 1) << j.name;
     if (!j.bone) continue;
     ++bones;
-    // Radius: half the median distance of the dominated skin from the segment; gap: the larger of a
-    // cell and the radius, at most 35% of the segment.
+    // Radius: 'Bone thickness' (its default) times the median distance of the dominated skin from the
+    // segment; gap: the larger of a cell and the radius, at most 35% of the segment.
     std::vector<double> d;
     for (const auto& v : skin) d.push_back(segment_distance(v.data(), j.a, j.b));
     std::sort(d.begin(), d.end());
-    EXPECT_NEAR(j.radius, 0.5 * d[d.size() / 2], 1e-12) << j.name;
+    EXPECT_NEAR(j.radius, SkeletonParameters{}.bone_thickness * d[d.size() / 2], 1e-12) << j.name;
     const double L = std::sqrt((j.b[0] - j.a[0]) * (j.b[0] - j.a[0]) + (j.b[1] - j.a[1]) * (j.b[1] - j.a[1]) +
                                (j.b[2] - j.a[2]) * (j.b[2] - j.a[2]));
     EXPECT_NEAR(j.gap, std::min(std::max(0.03, j.radius), 0.35 * L), 1e-12) << j.name;
