@@ -99,8 +99,9 @@ struct SkeletonParameters {
   // 3 cm cells between the pelvis's and the thigh's held nodes, and its hip flexion folded one of them
   // (15 quasi-static frame ends with an inverted point, 16 with inertia). At 0.4 the corpus ends no
   // frame with an inverted point the rest pose did not have but Testwuson's run with inertia (1 point
-  // at 2 frames, as at 0.5), and takes 6% fewer Newton iterations; 0.35 costs BCN 28% more
-  // (docs/performance.md, "Thinner bones").
+  // at 2 frames, as at 0.5), and takes 5.7% fewer Newton iterations; 0.35 and 0.45 also keep BCN's
+  // groin unfolded but cost it 28% and 19% more (the counts are chaotic in this value; docs/
+  // performance.md, "Thinner bones").
   double bone_thickness = 0.4, joint_gap = 0.0;
   std::string skip_joints, include_joints;
   int run_up = -1;
