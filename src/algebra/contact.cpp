@@ -197,6 +197,7 @@ ContactTerm::ContactTerm(const System& system, const ContactSettings& settings, 
             distance2(surface_.X[v], closest_on_triangle(surface_.X[v], surface_.X[T[0]], surface_.X[T[1]], surface_.X[T[2]], w)));
         clearance_[v] = std::min(clearance_[v], d);
       });
+  if (self_barrier() && settings_.edge_pairs) build_edges();
 }
 
 std::vector<std::string> ContactTerm::notes() const {
@@ -241,6 +242,7 @@ void ContactTerm::couplings(std::vector<std::pair<GlobalId, GlobalId>>& out) con
       for (int l = 0; l < 4; ++l)
         if (l != j) out.emplace_back(p.node[j], p.node[l]);
     }
+    if (p.edges) continue;  // (a barrier's pairs are found afresh before every solve)
     const bool sample_owned = owned(p.node[0]);
     for (int j = 1; j < 4; ++j) {
       const int v = surface_.vertex_of(p.node[j]);
@@ -379,6 +381,8 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
   global_pairs_ = 0;
   const std::vector<Chosen> last = std::move(chosen_);
   chosen_.clear();
+  const std::vector<std::array<int, 2>> last_edges = std::move(chosen_edges_);
+  chosen_edges_.clear();
   if (!settings_.self) {
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return stats;
@@ -386,7 +390,7 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
   gather_surface(at);
   ensure_tied();
   if (settings_.barrier) {
-    stats.added = detect_barrier(at, last, stats);
+    stats.added = detect_barrier(at, last, last_edges, stats);
   } else {
     detect_springs(at, last, keep, multipliers, slide, stats);
   }
@@ -777,6 +781,26 @@ void ContactTerm::install() {
     p.owner = surface_.owner[c.vertex];
     pairs_.push_back(p);
   }
+  global_pairs_ += static_cast<long long>(chosen_edges_.size());
+  for (const auto& [e, f] : chosen_edges_) {
+    Pair p{};
+    const int verts[4] = {edges_[e][0], edges_[e][1], edges_[f][0], edges_[f][1]};
+    bool here = false;
+    for (int j = 0; j < 4; ++j) {
+      p.node[j] = surface_.gid[verts[j]];
+      for (int d = 0; d < 3; ++d) p.X[j][d] = surface_.X[verts[j]][d];
+      p.col[j] = -1;
+      here = here || surface_.owner[verts[j]] == rank_;
+    }
+    if (!here) continue;
+    p.edges = true;
+    p.area = 0.5 * (edge_area_[e] + edge_area_[f]);
+    p.delta = edge_dhat(e, f);
+    p.owner = surface_.owner[verts[0]];
+    // IPC's eps_x: 1e-3 |A1 - A0|^2 |B1 - B0|^2 at rest.
+    p.mollifier = 1e-3 * distance2(surface_.X[verts[0]], surface_.X[verts[1]]) * distance2(surface_.X[verts[2]], surface_.X[verts[3]]);
+    pairs_.push_back(p);
+  }
   columns_changed(*system_.column_dofs());
 }
 
@@ -816,6 +840,7 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   std::vector<std::pair<int, int>> pairs;
   pairs.reserve(chosen_.size());
   for (const Chosen& c : chosen_) pairs.emplace_back(c.vertex, c.triangle);
+  for (const auto& [e, f] : chosen_edges_) pairs.emplace_back(-1 - e, f);
   std::sort(pairs.begin(), pairs.end());
   // Only while the samples inside get no shallower (or none is inside then and now): refreezing a
   // stuck sample's springs is what pushes it out of a fold (tests/fold_test.sh).
@@ -873,6 +898,7 @@ void ContactTerm::abandon_step() {
 
 void ContactTerm::commit() {
   committed_chosen_ = chosen_;
+  committed_chosen_edges_ = chosen_edges_;
   committed_collider_lambda_ = collider_lambda_;
 }
 
@@ -885,6 +911,11 @@ void ContactTerm::save_state(TermState& state) const {
                                c.normal[0], c.normal[1], c.normal[2], c.lambda});
   }
   state.shared.emplace_back("pairs", std::move(pairs));
+  if (!committed_chosen_edges_.empty()) {  // the barrier's edge-edge pairs: the two edges
+    std::vector<double> edges;
+    for (const auto& [e, f] : committed_chosen_edges_) edges.insert(edges.end(), {static_cast<double>(e), static_cast<double>(f)});
+    state.shared.emplace_back("edge pairs", std::move(edges));
+  }
   state.shared.emplace_back("fresh start", std::vector<double>{fresh_start_ ? 1.0 : 0.0});
   if (!colliders_.empty()) {
     // Per owned node, its traction on each collider (0 off the surface).
@@ -907,6 +938,17 @@ void ContactTerm::load_state(const TermState& state) {
     if (!(r[0] >= 0 && r[0] < V && r[1] >= 0 && r[1] < T && r[8] >= 0.0))
       throw InputError("contact: the checkpoint's pair " + std::to_string(k / 9) + " names no surface vertex or triangle of this mesh");
     chosen_.push_back({static_cast<int>(r[0]), static_cast<int>(r[1]), {r[2], r[3], r[4]}, {r[5], r[6], r[7]}, r[8]});
+  }
+  chosen_edges_.clear();
+  if (const std::vector<double>* edges = state.find_shared("edge pairs")) {
+    const auto E = static_cast<double>(edges_.size());
+    if (edges->size() % 2 != 0) throw InputError("contact: the checkpoint's edge pairs are malformed");
+    for (std::size_t k = 0; k < edges->size(); k += 2) {
+      const double e = (*edges)[k], f = (*edges)[k + 1];
+      if (!(e >= 0 && e < E && f >= 0 && f < E))
+        throw InputError("contact: the checkpoint's edge pair " + std::to_string(k / 2) + " names no surface edge of this mesh");
+      chosen_edges_.push_back({static_cast<int>(e), static_cast<int>(f)});
+    }
   }
   if (!colliders_.empty()) {
     const TermState::Nodal* n = state.find_nodal("collider tractions");

@@ -14,7 +14,71 @@ namespace sinew {
 
 using namespace geom;
 
-long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats) {
+namespace {
+// Calls fn(e, f) for every pair of edges e < f (e among `mine`) whose boxes, e's grown by `grow`, meet.
+template <class Fn>
+void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes, double grow, Fn&& fn) {
+  const AabbTree tree(boxes);
+  for (int e : mine) {
+    Box b = boxes[e];
+    b.inflate(grow);
+    tree.descend([&](int id) { return !tree.node_box(id).overlaps(b); },
+                 [&](int f) {
+                   if (f > e && boxes[f].overlaps(b)) fn(e, f);
+                 });
+  }
+}
+}  // namespace
+
+void ContactTerm::build_edges() {
+  // Every edge once, with a third of each of its triangles' reference areas (IPC's edge areas).
+  std::vector<std::array<int, 2>> all;
+  for (const auto& T : surface_.triangles)
+    for (int k = 0; k < 3; ++k) all.push_back({std::min(T[k], T[(k + 1) % 3]), std::max(T[k], T[(k + 1) % 3])});
+  std::sort(all.begin(), all.end());
+  edges_.clear();
+  for (const auto& e : all)
+    if (edges_.empty() || edges_.back() != e) edges_.push_back(e);
+  edge_area_.assign(edges_.size(), 0.0);
+  for (const auto& T : surface_.triangles) {
+    const double a = 0.5 * norm(cross(surface_.X[T[1]] - surface_.X[T[0]], surface_.X[T[2]] - surface_.X[T[0]]));
+    for (int k = 0; k < 3; ++k) {
+      const std::array<int, 2> e{std::min(T[k], T[(k + 1) % 3]), std::max(T[k], T[(k + 1) % 3])};
+      edge_area_[std::lower_bound(edges_.begin(), edges_.end(), e) - edges_.begin()] += a / 3.0;
+    }
+  }
+  owned_edges_.clear();
+  std::vector<int> every(edges_.size());
+  for (std::size_t e = 0; e < edges_.size(); ++e) {
+    every[e] = static_cast<int>(e);
+    if (surface_.owner[edges_[e][0]] == rank_) owned_edges_.push_back(static_cast<int>(e));
+  }
+  // What nearly touches at rest (on every rank alike: the surface is replicated), as clearance_ for the
+  // vertices: its barrier starts at half that distance.
+  const double delta = settings_.thickness;
+  edge_clearance_.assign(edges_.size(), delta);
+  std::vector<Box> boxes(edges_.size());
+  for (std::size_t e = 0; e < edges_.size(); ++e)
+    for (int v : edges_[e]) boxes[e].add(surface_.X[v]);
+  edge_box_pairs(every, boxes, delta, [&](int e, int f) {
+    const auto &E = edges_[e], &F = edges_[f];
+    if (E[0] == F[0] || E[0] == F[1] || E[1] == F[0] || E[1] == F[1]) return;
+    const double d = barrier::segment_distance(surface_.X[E[0]], surface_.X[E[1]], surface_.X[F[0]], surface_.X[F[1]]);
+    edge_clearance_[e] = std::min(edge_clearance_[e], d);
+    edge_clearance_[f] = std::min(edge_clearance_[f], d);
+  });
+}
+
+bool ContactTerm::edge_skips(int e, int f) const {
+  const auto &E = edges_[e], &F = edges_[f];
+  if (E[0] == F[0] || E[0] == F[1] || E[1] == F[0] || E[1] == F[1]) return true;
+  // An edge of tied nodes is the attachment's; a pair touching at rest has no barrier (nor limit).
+  if (!tied_.empty() && ((tied_[E[0]] && tied_[E[1]]) || (tied_[F[0]] && tied_[F[1]]))) return true;
+  return !(edge_dhat(e, f) > 0.0);
+}
+
+long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Chosen>& last,
+                                      const std::vector<std::array<int, 2>>& last_edges, ContactDetection& stats) {
   // Every owned sample with every triangle but its own within the margin: the pairs the energy
   // sums over until the next detection (those farther than their dhat add nothing yet).
   if (prescribed_samples_ < 0) {  // counted once: the prescribed DOFs are set before any detection
@@ -62,7 +126,28 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
     if (c.d2 < dhat * dhat && !before.count({c.vertex, c.triangle})) ++added;
     chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {0.0, 0.0, 0.0}, 0.0});
   }
-  stats.proximity = static_cast<long long>(chosen_.size());
+  // The edge pairs within the margin, likewise.
+  if (!edges_.empty()) {
+    std::vector<Box> boxes(edges_.size());
+    for (std::size_t e = 0; e < edges_.size(); ++e)
+      for (int v : edges_[e]) boxes[e].add(x[v]);
+    std::vector<std::array<int, 2>> near;
+    edge_box_pairs(owned_edges_, boxes, margin, [&](int e, int f) {
+      if (edge_skips(e, f)) return;
+      const auto &E = edges_[e], &F = edges_[f];
+      if (barrier::segment_distance(x[E[0]], x[E[1]], x[F[0]], x[F[1]]) < margin) near.push_back({e, f});
+    });
+    std::vector<std::array<int, 2>> all_edges = allgatherv(raw_comm(*system_.comm()), near);
+    std::sort(all_edges.begin(), all_edges.end());
+    const std::set<std::array<int, 2>> edges_before(last_edges.begin(), last_edges.end());
+    for (const auto& [e, f] : all_edges) {
+      const auto &E = edges_[e], &F = edges_[f];
+      const double dhat = edge_dhat(e, f);
+      if (barrier::segment_distance(x[E[0]], x[E[1]], x[F[0]], x[F[1]]) < dhat && !edges_before.count({e, f})) ++added;
+    }
+    chosen_edges_ = std::move(all_edges);
+  }
+  stats.proximity = static_cast<long long>(chosen_.size() + chosen_edges_.size());
   install();
   for (Pair& p : pairs_) p.delta = barrier_dhat(surface_.vertex_of(p.node[0]));
   return added;
@@ -86,31 +171,42 @@ void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& ener
     Vec x[4];
     for (int j = 0; j < 4; ++j)
       for (int c = 0; c < 3; ++c) x[j][c] = p.X[j][c] + u(p.col[j] + c);
-    const double d = barrier::point_triangle_distance(x[0], x[1], x[2], x[3]);
+    const double d = p.edges ? barrier::segment_distance(x[0], x[1], x[2], x[3]) : barrier::point_triangle_distance(x[0], x[1], x[2], x[3]);
     if (!(d < dhat)) continue;
     if (!(d > 0.0)) {  // touching: the energy is +inf there, a state no line search accepts
       energy = HUGE_VAL;
       continue;
     }
-    const barrier::Distance2 D = barrier::distance2(x[0], x[1], x[2], x[3], barrier::closest_feature(x[0], x[1], x[2], x[3]));
     const double Dhat = dhat * dhat, kappa = settings_.stiffness * p.area / Dhat;
-    const barrier::Law b = barrier::law(D.value, Dhat);
+    // g: the pair's energy per kappa, its gradient and (wanted or not) Hessian in the twelve coordinates.
+    barrier::Distance2 g;
+    if (p.edges) {
+      g = barrier::edge_edge_barrier(x[0], x[1], x[2], x[3], barrier::closest_edge_feature(x[0], x[1], x[2], x[3]), Dhat, p.mollifier);
+    } else {
+      const barrier::Distance2 D = barrier::distance2(x[0], x[1], x[2], x[3], barrier::closest_feature(x[0], x[1], x[2], x[3]));
+      const barrier::Law b = barrier::law(D.value, Dhat);
+      g.value = b.e;
+      for (int i = 0; i < 12; ++i) g.grad[i] = b.d1 * D.grad[i];
+      if (in.want_matrix)
+        for (int i = 0; i < 12; ++i)
+          for (int j = 0; j < 12; ++j) g.hess[i * 12 + j] = b.d2 * D.grad[i] * D.grad[j] + b.d1 * D.hess[i * 12 + j];
+    }
     if (p.owner == rank_) {
-      energy += kappa * b.e;
+      energy += kappa * g.value;
       ++pressing;
-      pressure_[p.col[0] / 3] += kappa * std::fabs(b.d1) * 2.0 * d / p.area;
+      // (the traction on the pair's first node: |dE/dx_0|, per its area)
+      pressure_[p.col[0] / 3] += kappa * std::sqrt(g.grad[0] * g.grad[0] + g.grad[1] * g.grad[1] + g.grad[2] * g.grad[2]) / p.area;
     }
     double H[144];
     if (in.want_matrix) {
-      for (int i = 0; i < 12; ++i)
-        for (int j = 0; j < 12; ++j) H[i * 12 + j] = kappa * (b.d2 * D.grad[i] * D.grad[j] + b.d1 * D.hess[i * 12 + j]);
+      for (int i = 0; i < 144; ++i) H[i] = kappa * g.hess[i];
       if (!in.exact_terms) barrier::project_psd(H);
     }
     for (int j = 0; j < 4; ++j) {
       if (p.col[j] >= owned_dofs) continue;  // not a row of this rank
       for (int c = 0; c < 3; ++c) {
         const int row = p.col[j] + c, i = 3 * j + c;
-        if (in.want_force) f(row) += kappa * b.d1 * D.grad[i];
+        if (in.want_force) f(row) += kappa * g.grad[i];
         if (in.want_matrix) {
           int cols[12];
           for (int l = 0; l < 4; ++l)
@@ -152,6 +248,25 @@ void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const 
                  });
   }
 }
+
+// The same for edge pairs (e among `mine`, e < f): fn(e, f, fraction).
+template <class Skips, class Fn>
+void limited_edge_pairs(const std::vector<std::array<int, 2>>& edges, const std::vector<int>& mine, const std::vector<Vec>& x0,
+                        const std::vector<Vec>& x1, Skips&& skips, Fn&& fn) {
+  std::vector<Box> swept(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    for (int m : edges[e]) {
+      swept[e].add(x0[m]);
+      swept[e].add(x1[m]);
+    }
+  edge_box_pairs(mine, swept, 0.0, [&](int e, int f) {
+    if (skips(e, f)) return;
+    const auto &E = edges[e], &F = edges[f];
+    const double t = barrier::edge_edge_toi(x0[E[0]], x0[E[1]], x0[F[0]], x0[F[1]], x1[E[0]] - x0[E[0]], x1[E[1]] - x0[E[1]],
+                                            x1[F[0]] - x0[F[0]], x1[F[1]] - x0[F[1]], 1.0);
+    if (t < 1.0) fn(e, f, t);
+  });
+}
 }  // namespace
 
 bool ContactTerm::ccd_skips(int t, int v) const {
@@ -174,6 +289,11 @@ void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
                   fraction[v] = std::min(fraction[v], 0.9 * f);
                   for (int m : surface_.triangles[t]) fraction[m] = std::min(fraction[m], 0.9 * f);
                 });
+  limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+                     [&](int e, int f, double t) {
+                       for (int m : edges_[e]) fraction[m] = std::min(fraction[m], 0.9 * t);
+                       for (int m : edges_[f]) fraction[m] = std::min(fraction[m], 0.9 * t);
+                     });
   std::vector<double> global(fraction.size());
   MPI_Allreduce(fraction.data(), global.data(), static_cast<int>(fraction.size()), MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
   const std::vector<char> fixed = system_.fixed_owned_mask();
@@ -204,6 +324,8 @@ double ContactTerm::step_limit(const Vector& u, const Vector& du, double t_max) 
   limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
                 [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int, int, double f) { limit = std::min(limit, f); });
+  limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+                     [&](int, int, double t) { limit = std::min(limit, t); });
   double global = limit;
   MPI_Allreduce(&limit, &global, 1, MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
   return global * t_max;

@@ -68,6 +68,7 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
   cs.rounds = p.rounds;
   cs.onset = p.smooth ? cs.thickness : 0.0;
   cs.barrier = p.model == ContactParameters::Model::Barrier;
+  cs.edge_pairs = p.edge_pairs;
   auto term = std::make_shared<ContactTerm>(system, cs, colliders->shapes());
   term->set_pose_source([colliders](std::size_t k, double t) { return colliders->pose(k, t); });
   return term;

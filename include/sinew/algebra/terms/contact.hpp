@@ -50,6 +50,8 @@
 #include <sinew/discretization/boundary.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -113,6 +115,11 @@ struct ContactSettings {
   // `margin` (contact_barrier.hpp) instead of penalty springs: `thickness` is where the barrier starts
   // (dhat), and every Newton step is cut short of any vertex passing through a triangle (step_limit).
   bool barrier = false;
+  // With the barrier, edge-edge pairs beside the vertex-triangle ones, in the energy and in the step
+  // limit: without them two edges can pass through each other with no vertex crossing a face. Off by
+  // default: on BCN_Epileptic's clip they left a point inverted behind the knee at 8 frame ends
+  // (docs/performance.md, "Edge-edge pairs for the barrier").
+  bool edge_pairs = false;
 };
 
 // What one detection pass found (global counts).
@@ -232,6 +239,10 @@ class ContactTerm final : public EnergyTerm {
     double lambda;     // augmented-Lagrangian traction (>= 0)
     int owner;         // the rank that owns the sample and counts the energy
     int col[4];        // column of each node's first DOF on this rank (-1: none)
+    // The barrier's edge-edge pairs: node holds the two edges' ends (a0, a1, b0, b1), area their share
+    // of the surface, and mollifier the |ea x eb|^2 below which the barrier fades (edge_edge_barrier).
+    bool edges = false;
+    double mollifier = 0.0;
   };
   const std::vector<Pair>& pairs() const { return pairs_; }
 
@@ -255,6 +266,14 @@ class ContactTerm final : public EnergyTerm {
     double beta[3], normal[3], lambda;
   };
   std::vector<Chosen> chosen_;
+  // The barrier's edge-edge pairs of the last pass (edge indices, first < second; the same on every rank).
+  std::vector<std::array<int, 2>> chosen_edges_, committed_chosen_edges_;
+  // The surface's edges (vertex pairs, first < second), each one's share of the reference area (a third
+  // of its triangles') and its distance at rest to the nearest edge it shares no vertex with (at most
+  // the thickness); the edges whose first vertex this rank owns.
+  std::vector<std::array<int, 2>> edges_;
+  std::vector<double> edge_area_, edge_clearance_;
+  std::vector<int> owned_edges_;
   bool fresh_start_ = true;  // the next step's first detection pairs afresh (none yet, or after a failed attempt)
   // Per round of this step: its pairs (sample, triangle; sorted) and the deepest sample inside.
   std::vector<std::pair<std::vector<std::pair<int, int>>, double>> round_pairs_;
@@ -284,10 +303,17 @@ class ContactTerm final : public EnergyTerm {
   void install();  // pairs_ from chosen_
   // The barrier's detection at `at`: every owned sample's triangles within the margin, gathered; the
   // count of pairs nearer than their dhat that `last` lacked (contact_barrier.cpp).
-  long long detect_barrier(const Positions& at, const std::vector<Chosen>& last, ContactDetection& stats);
+  long long detect_barrier(const Positions& at, const std::vector<Chosen>& last, const std::vector<std::array<int, 2>>& last_edges,
+                           ContactDetection& stats);
   void add_barrier(const TermInput& in, TermOutput& out, double& energy, long long& pressing) const;
   // The pairs the barrier's CCD leaves out (t < 0: the sample v itself).
   bool ccd_skips(int t, int v) const;
+  // The same for edges e and f (sharing a vertex, tied, touching at rest), and their pair's dhat.
+  bool edge_skips(int e, int f) const;
+  double edge_dhat(int e, int f) const {
+    return std::min(settings_.thickness, 0.5 * std::min(edge_clearance_[e], edge_clearance_[f]));
+  }
+  void build_edges();  // edges_, edge_area_, edge_clearance_, owned_edges_
   // The barrier's dhat for surface vertex v: the thickness, or half the vertex's clearance at rest.
   double barrier_dhat(int v) const { return std::min(settings_.thickness, 0.5 * clearance_[v]); }
   void commit();

@@ -2,7 +2,8 @@
 // Incremental Potential Contact (Li et al. 2020): the unsigned distance between a surface vertex and a
 // surface triangle, with its gradient and Hessian in the twelve coordinates; a log barrier in the
 // squared distance that grows without bound as the two touch; and a continuous collision test (additive
-// CCD, Li, Kaufman and Jiang 2021) that bounds a step so that no vertex passes through a triangle.
+// CCD, Li, Kaufman and Jiang 2021) that bounds a step so that no vertex passes through a triangle; and
+// the same for two edges (ContactSettings::edge_pairs), with IPC's mollifier for near-parallel edges.
 // Where the paper's penalty springs (Sec. 6) act on a plane frozen when the pair was found, the barrier's
 // distance follows the surface inside Newton: a crease's samples cannot slide past a frozen plane into
 // the body, because no state the line search accepts has one on the other side of a face.
@@ -155,19 +156,15 @@ inline double point_triangle_distance(const geom::Vec& p, const geom::Vec& a, co
   return std::sqrt(geom::distance2(p, geom::closest_on_triangle(p, a, b, c, w)));
 }
 
-// Additive CCD (Li, Kaufman and Jiang 2021, Alg. 1) of a vertex p moving by dp against a triangle
-// (a, b, c) moving by (da, db, dc), linearly over t in [0, t_max]: the distance changes no faster than
-// L, a bound on the relative motion, so an advance by less than d / L cannot pass through. Returns a t
-// at which the distance is still at least `keep` times the distance at 0 (t_max when the motion never
-// comes that near), after at most `iterations` advances (then the t reached: conservative).
-inline double vertex_triangle_toi(const geom::Vec& p, const geom::Vec& a, const geom::Vec& b, const geom::Vec& c, const geom::Vec& dp,
-                                  const geom::Vec& da, const geom::Vec& db, const geom::Vec& dc, double t_max, double keep = 0.1,
-                                  int iterations = 200) {
-  using namespace geom;
-  const Vec mean = 0.25 * (dp + da + db + dc);
-  const double lp = geom::norm(dp - mean) + std::max({geom::norm(da - mean), geom::norm(db - mean), geom::norm(dc - mean)});
-  if (!(lp > 0.0)) return t_max;
-  const double d0 = point_triangle_distance(p, a, b, c);
+// Additive CCD (Li, Kaufman and Jiang 2021, Alg. 1) along a linear motion over t in [0, t_max]: the
+// distance dist(t) changes no faster than L, a bound on the pair's relative motion, so an advance by
+// less than d / L cannot pass through. Returns a t at which the distance is still at least `keep` times
+// the distance at 0 (t_max when the motion never comes that near), after at most `iterations` advances
+// (then the t reached: conservative).
+template <class Dist>
+double additive_toi(Dist&& dist, double L, double t_max, double keep, int iterations) {
+  if (!(L > 0.0)) return t_max;
+  const double d0 = dist(0.0);
   if (!(d0 > 0.0)) return 0.0;
   // Over [t, t + (d - floor) / L] the distance stays above floor; 0.9 of that per advance, until the
   // end of the interval or until the distance has come within 1% of the floor (the approach converges
@@ -175,13 +172,149 @@ inline double vertex_triangle_toi(const geom::Vec& p, const geom::Vec& a, const 
   const double floor = keep * d0;
   double t = 0.0, d = d0;
   for (int k = 0; k < iterations; ++k) {
-    const double advance = 0.9 * (d - floor) / lp;
+    const double advance = 0.9 * (d - floor) / L;
     if (t + advance >= t_max) return t_max;
     t += advance;
-    d = point_triangle_distance(p + t * dp, a + t * da, b + t * db, c + t * dc);
+    d = dist(t);
     if (d - floor <= 0.01 * floor) return t;
   }
   return t;
+}
+
+// A vertex p moving by dp against a triangle (a, b, c) moving by (da, db, dc) (additive_toi).
+inline double vertex_triangle_toi(const geom::Vec& p, const geom::Vec& a, const geom::Vec& b, const geom::Vec& c, const geom::Vec& dp,
+                                  const geom::Vec& da, const geom::Vec& db, const geom::Vec& dc, double t_max, double keep = 0.1,
+                                  int iterations = 200) {
+  using namespace geom;
+  const Vec mean = 0.25 * (dp + da + db + dc);
+  const double L = geom::norm(dp - mean) + std::max({geom::norm(da - mean), geom::norm(db - mean), geom::norm(dc - mean)});
+  return additive_toi([&](double t) { return point_triangle_distance(p + t * dp, a + t * da, b + t * db, c + t * dc); }, L, t_max,
+                      keep, iterations);
+}
+
+// ---- edge-edge pairs ------------------------------------------------------------------------------------
+// Point-triangle pairs keep every vertex out of every face, but two edges can still pass through each
+// other with no vertex crossing a face (two blades crossing; a convex lattice corner swept through
+// another part's edge). IPC therefore adds the edge-edge distance, with a mollifier that fades the
+// barrier out as the edges turn parallel, where the edge-edge distance stops being smooth (Li et al.
+// 2020, Sec. 4.3).
+
+// The parameters s, t in [0, 1] of the closest points of the segments (a0, a1) and (b0, b1) (Ericson,
+// Real-Time Collision Detection, 5.1.9; parallel segments take s = 0).
+inline void closest_segment_parameters(const geom::Vec& a0, const geom::Vec& a1, const geom::Vec& b0, const geom::Vec& b1, double& s,
+                                       double& t) {
+  using namespace geom;
+  const Vec d1 = a1 - a0, d2 = b1 - b0, r = a0 - b0;
+  const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  s = t = 0.0;
+  if (!(a > 0.0) && !(e > 0.0)) return;
+  if (!(a > 0.0)) {
+    t = std::clamp(f / e, 0.0, 1.0);
+    return;
+  }
+  const double c = dot(d1, r);
+  if (!(e > 0.0)) {
+    s = std::clamp(-c / a, 0.0, 1.0);
+    return;
+  }
+  const double b = dot(d1, d2), denom = a * e - b * b;
+  s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  t = (b * s + f) / e;
+  if (t < 0.0) {
+    t = 0.0;
+    s = std::clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1.0) {
+    t = 1.0;
+    s = std::clamp((b - c) / a, 0.0, 1.0);
+  }
+}
+
+inline double segment_distance(const geom::Vec& a0, const geom::Vec& a1, const geom::Vec& b0, const geom::Vec& b1) {
+  using namespace geom;
+  double s, t;
+  closest_segment_parameters(a0, a1, b0, b1, s, t);
+  return std::sqrt(geom::distance2(a0 + s * (a1 - a0), b0 + t * (b1 - b0)));
+}
+
+// Which parts of the segments are closest: their interiors (the lines' distance), an end point of one
+// and the other's interior, or two end points. Points are numbered a0, a1, b0, b1 (0-3).
+struct EdgeFeature {
+  enum Kind { Lines, PointEdge, Points } kind = Lines;
+  int p = 0, q = 0;  // PointEdge: point p, edge q (0: a, 1: b); Points: points p and q
+};
+inline EdgeFeature closest_edge_feature(const geom::Vec& a0, const geom::Vec& a1, const geom::Vec& b0, const geom::Vec& b1) {
+  double s, t;
+  closest_segment_parameters(a0, a1, b0, b1, s, t);
+  const double tol = 1e-12;
+  const bool s_in = s > tol && s < 1.0 - tol, t_in = t > tol && t < 1.0 - tol;
+  const int sa = s < 0.5 ? 0 : 1, tb = t < 0.5 ? 2 : 3;
+  if (s_in && t_in) return {EdgeFeature::Lines, 0, 0};
+  if (s_in) return {EdgeFeature::PointEdge, tb, 0};
+  if (t_in) return {EdgeFeature::PointEdge, sa, 1};
+  return {EdgeFeature::Points, sa, tb};
+}
+
+// f(x) with x a Hyper: the chain rule with f's value and first two derivatives at x.v.
+template <int N>
+Hyper<N> chain(const Hyper<N>& x, double f, double f1, double f2) {
+  Hyper<N> r;
+  r.v = f;
+  for (int i = 0; i < N; ++i) r.g[i] = f1 * x.g[i];
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) r.h[i * N + j] = f2 * x.g[i] * x.g[j] + f1 * x.h[i * N + j];
+  return r;
+}
+
+// The mollified edge-edge barrier per unit of stiffness, m(c) b(D), with its gradient and Hessian in
+// (a0, a1, b0, b1) (Distance2's layout): D the squared distance of `feature`, c = |(a1 - a0) x (b1 - b0)|^2,
+// m(c) = (2 - c / eps) c / eps below eps and 1 above (C1 in c; IPC's e_k, with eps = 1e-3 |A1 - A0|^2
+// |B1 - B0|^2 at rest), so that the energy vanishes as the edges turn parallel instead of jumping.
+inline Distance2 edge_edge_barrier(const geom::Vec& a0, const geom::Vec& a1, const geom::Vec& b0, const geom::Vec& b1, EdgeFeature f,
+                                   double Dhat, double eps) {
+  using H = Hyper<12>;
+  const geom::Vec* pts[4] = {&a0, &a1, &b0, &b1};
+  V3<H> x[4];
+  for (int k = 0; k < 4; ++k) x[k] = {H::variable((*pts[k])[0], 3 * k), H::variable((*pts[k])[1], 3 * k + 1), H::variable((*pts[k])[2], 3 * k + 2)};
+  const V3<H> ea = x[1] - x[0], eb = x[3] - x[2];
+  const V3<H> n = cross(ea, eb);
+  H D;
+  if (f.kind == EdgeFeature::Lines) {  // ((a0 - b0) . n)^2 / |n|^2
+    const H s = dot(x[0] - x[2], n);
+    D = s * s / dot(n, n);
+  } else if (f.kind == EdgeFeature::PointEdge) {  // |p - e0|^2 - ((p - e0) . e)^2 / |e|^2
+    const V3<H>& e0 = x[2 * f.q];
+    const V3<H> e = f.q == 0 ? ea : eb, r = x[f.p] - e0;
+    const H s = dot(r, e);
+    D = dot(r, r) - s * s / dot(e, e);
+  } else {
+    const V3<H> r = x[f.p] - x[f.q];
+    D = dot(r, r);
+  }
+  Distance2 out{};
+  const Law b = law(D.v, Dhat);
+  if (b.e == 0.0) return out;
+  const H B = chain(D, b.e, b.d1, b.d2);
+  const H c = dot(n, n);
+  H E = B;
+  if (c.v < eps) {
+    const double y = c.v / eps;
+    E = chain(c, (2.0 - y) * y, (2.0 - 2.0 * y) / eps, -2.0 / (eps * eps)) * B;
+  }
+  out.value = E.v;
+  std::copy(E.g, E.g + 12, out.grad);
+  std::copy(E.h, E.h + 144, out.hess);
+  return out;
+}
+
+// An edge (a0, a1) moving by (da0, da1) against an edge (b0, b1) moving by (db0, db1) (additive_toi).
+inline double edge_edge_toi(const geom::Vec& a0, const geom::Vec& a1, const geom::Vec& b0, const geom::Vec& b1, const geom::Vec& da0,
+                            const geom::Vec& da1, const geom::Vec& db0, const geom::Vec& db1, double t_max, double keep = 0.1,
+                            int iterations = 200) {
+  using namespace geom;
+  const Vec mean = 0.25 * (da0 + da1 + db0 + db1);
+  const double L = std::max(geom::norm(da0 - mean), geom::norm(da1 - mean)) + std::max(geom::norm(db0 - mean), geom::norm(db1 - mean));
+  return additive_toi([&](double t) { return segment_distance(a0 + t * da0, a1 + t * da1, b0 + t * db0, b1 + t * db1); }, L, t_max,
+                      keep, iterations);
 }
 
 }  // namespace sinew::barrier
