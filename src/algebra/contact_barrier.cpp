@@ -149,7 +149,8 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
   }
   stats.proximity = static_cast<long long>(chosen_.size() + chosen_edges_.size());
   install();
-  for (Pair& p : pairs_) p.delta = barrier_dhat(surface_.vertex_of(p.node[0]));
+  for (Pair& p : pairs_)  // (an edge pair keeps the edge_dhat install() gave it)
+    if (!p.edges) p.delta = barrier_dhat(surface_.vertex_of(p.node[0]));
   return added;
 }
 
