@@ -131,21 +131,25 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
     std::vector<Box> boxes(edges_.size());
     for (std::size_t e = 0; e < edges_.size(); ++e)
       for (int v : edges_[e]) boxes[e].add(x[v]);
-    std::vector<std::array<int, 2>> near;
+    struct Near {  // (the distance travels with the pair, so no rank computes it twice)
+      int e, f;
+      double d;
+    };
+    std::vector<Near> near;
     edge_box_pairs(owned_edges_, boxes, margin, [&](int e, int f) {
       if (edge_skips(e, f)) return;
       const auto &E = edges_[e], &F = edges_[f];
-      if (barrier::segment_distance(x[E[0]], x[E[1]], x[F[0]], x[F[1]]) < margin) near.push_back({e, f});
+      const double d = barrier::segment_distance(x[E[0]], x[E[1]], x[F[0]], x[F[1]]);
+      if (d < margin) near.push_back({e, f, d});
     });
-    std::vector<std::array<int, 2>> all_edges = allgatherv(raw_comm(*system_.comm()), near);
-    std::sort(all_edges.begin(), all_edges.end());
+    std::vector<Near> all_edges = allgatherv(raw_comm(*system_.comm()), near);
+    std::sort(all_edges.begin(), all_edges.end(), [](const Near& a, const Near& b) { return a.e != b.e ? a.e < b.e : a.f < b.f; });
     const std::set<std::array<int, 2>> edges_before(last_edges.begin(), last_edges.end());
-    for (const auto& [e, f] : all_edges) {
-      const auto &E = edges_[e], &F = edges_[f];
-      const double dhat = edge_dhat(e, f);
-      if (barrier::segment_distance(x[E[0]], x[E[1]], x[F[0]], x[F[1]]) < dhat && !edges_before.count({e, f})) ++added;
+    chosen_edges_.clear();
+    for (const Near& n : all_edges) {
+      if (n.d < edge_dhat(n.e, n.f) && !edges_before.count({n.e, n.f})) ++added;
+      chosen_edges_.push_back({n.e, n.f});
     }
-    chosen_edges_ = std::move(all_edges);
   }
   stats.proximity = static_cast<long long>(chosen_.size() + chosen_edges_.size());
   install();
