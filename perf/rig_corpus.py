@@ -6,14 +6,16 @@ clip's end, quasi-static (one load step per frame at 24 fps) and with inertia (b
     perf/rig_corpus.py --sinew build/sinew --out results/perf/rigs [--only NAME,...] [--modes M,...] [--quick] [--check]
 
 Prints one line per run (frames done, Newton and CG per frame, seconds per frame, inverted points,
-deepest penetration, surface points inside elements where the mesh folds (no face crossed), volume change,
+deepest penetration, surface points inside elements where the mesh folds (no face crossed), surface edges
+through a face (the surface through itself), volume change,
 and where the Newton iterations went: the share whose step the contact barrier's collision test held
 short, the share in the tail (|F| below 1000 times the tolerance), and the steps whose first guess it
 pulled back with their share; scripts/sinew-anatomy) and writes rigs.json and rigs.md in --out. --quick runs the
 first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
 frames with no inverted point at a frame end (quasi-static or with inertia), its deepest penetration
-below the contact thickness (0.05 cells), its volume within 2% of the rest's, and newton.csv holding as
-many of the frames' Newton iterations as log.csv counts."""
+below the contact thickness (0.05 cells), no surface edge through a face at a frame end, its volume
+within 2% of the rest's, and newton.csv holding as many of the frames' Newton iterations as log.csv
+counts."""
 import argparse, csv, json, os, re, subprocess, sys, time
 from importlib.machinery import SourceFileLoader
 
@@ -103,6 +105,10 @@ def summarize(log_csv, frames, tolerance=1e-2):
         "penetration_max": max([max(float(r.get("penetration") or 0.0), float(r.get("crossed_depth", r.get("inside_depth")) or 0.0))
                                 for r in rows] or [0.0]),
         "folded_max": max([int(float(r.get("inside_folded") or 0)) for r in rows] or [0]),
+        # Surface edges through a face at a frame end: the surface through itself, which the points'
+        # winding numbers miss where two edges cross (logs older than the column: 0).
+        "crossings_max": max([int(float(r.get("edges_through_faces") or 0)) for r in rows] or [0]),
+        "crossing_frames": sum(1 for r in rows if float(r.get("edges_through_faces") or 0) > 0),
         "volume_change_max": max([abs(float(r["volume_ratio"]) - 1.0) for r in rows] or [0.0]),
         "newton_total": sum(n) if rows else 0,
         **went,
@@ -159,7 +165,8 @@ def main():
             results.append(r)
             print(f"{name:24s} {mode:12s} exit {rc!s:7s} frames {r['done']}/{frames}  Newton/frame {r['newton_avg']:.1f} "
                   f"(max {r['newton_max']})  CG/frame {r['cg_avg']:.0f}  s/frame {r['seconds_avg']:.2f}  inverted {r['inverted_max']}  "
-                  f"min J {r['min_J']:.3g}  penetration {r['penetration_max']:.3g}  in folds {r['folded_max']}  volume {100 * r['volume_change_max']:.2f}%  "
+                  f"min J {r['min_J']:.3g}  penetration {r['penetration_max']:.3g}  in folds {r['folded_max']}  "
+                  f"edges through faces {r['crossings_max']} ({r['crossing_frames']} frames)  volume {100 * r['volume_change_max']:.2f}%  "
                   f"held {share(r['held'], r['newton_total'])}  tail {share(r['tail'], r['newton_total'])}  "
                   f"pulled-back guesses {r['pulled_back_steps']} ({share(r['pulled_back_iterations'], r['newton_total'])})", flush=True)
     json.dump(results, open(os.path.join(a.out, "rigs.json"), "w"), indent=1)
@@ -172,6 +179,8 @@ def main():
             failed.append(f"{what}: {r['inverted_max']} inverted points at a frame end")
         if not r["penetration_max"] < 0.05 * r["cell"]:
             failed.append(f"{what}: penetration {r['penetration_max']:.3g} not below the thickness {0.05 * r['cell']:.3g}")
+        if r["crossings_max"] > 0:
+            failed.append(f"{what}: {r['crossings_max']} surface edges through a face at a frame end ({r['crossing_frames']} frames)")
         if not r["volume_change_max"] < 0.02:
             failed.append(f"{what}: volume changed by {100 * r['volume_change_max']:.2f}%")
         if r["newton_rows"] != r["newton_total"]:
@@ -181,12 +190,12 @@ def main():
     if failed:
         sys.exit(1)
     with open(os.path.join(a.out, "rigs.md"), "w") as md:
-        md.write("| clip | run | exit | frames | Newton/frame (max) | CG/frame | s/frame | inverted at frame ends | min J | deepest penetration | points in folded elements | volume change | held by contact | tail | pulled-back guesses (their iterations) |\n")
-        md.write("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+        md.write("| clip | run | exit | frames | Newton/frame (max) | CG/frame | s/frame | inverted at frame ends | min J | deepest penetration | points in folded elements | surface edges through a face (frames) | volume change | held by contact | tail | pulled-back guesses (their iterations) |\n")
+        md.write("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
         for r in results:
             md.write(f"| {r['clip']} | {r['mode']} | {r['exit']} | {r['done']}/{r['frames']} | {r['newton_avg']:.1f} ({r['newton_max']}) | "
                      f"{r['cg_avg']:.0f} | {r['seconds_avg']:.2f} | {r['inverted_max']} | {r['min_J']:.3g} | {r['penetration_max']:.3g} | "
-                     f"{r['folded_max']} | {100 * r['volume_change_max']:.2f}% | {share(r['held'], r['newton_total'])} | "
+                     f"{r['folded_max']} | {r['crossings_max']} ({r['crossing_frames']}) | {100 * r['volume_change_max']:.2f}% | {share(r['held'], r['newton_total'])} | "
                      f"{share(r['tail'], r['newton_total'])} | {r['pulled_back_steps']} ({share(r['pulled_back_iterations'], r['newton_total'])}) |\n")
 
 

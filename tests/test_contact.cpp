@@ -394,6 +394,21 @@ TEST(Contact, TheWindingNumberIsOneInsideZeroOutsideAndTheBodysShareAtAVertex) {
   EXPECT_EQ(geom::solid_angle(x[0], x[0], x[1], x[2]), 0.0);
 }
 
+// A segment crosses a triangle only through its interior, from one side of its plane to the other:
+// an end point on the plane, a line through an edge or a corner, a segment in the plane or beside the
+// triangle is no crossing; the triangle's orientation does not matter.
+TEST(Contact, ASegmentCrossesATriangleOnlyThroughItsInterior) {
+  const Vec a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  EXPECT_TRUE(geom::segment_crosses_triangle({0.2, 0.2, -1}, {0.2, 0.3, 1}, a, b, c));
+  EXPECT_TRUE(geom::segment_crosses_triangle({0.2, 0.2, 1}, {0.2, 0.3, -1}, a, c, b));
+  EXPECT_FALSE(geom::segment_crosses_triangle({0.6, 0.6, -1}, {0.6, 0.6, 1}, a, b, c));   // beside it
+  EXPECT_FALSE(geom::segment_crosses_triangle({0.2, 0.2, 0.1}, {0.2, 0.3, 1}, a, b, c));  // above it
+  EXPECT_FALSE(geom::segment_crosses_triangle({0.2, 0.2, 0}, {0.2, 0.3, 1}, a, b, c));    // from its face
+  EXPECT_FALSE(geom::segment_crosses_triangle({0.5, 0, -1}, {0.5, 0, 1}, a, b, c));       // through an edge
+  EXPECT_FALSE(geom::segment_crosses_triangle({0, 0, -1}, {0, 0, 1}, a, b, c));           // through a corner
+  EXPECT_FALSE(geom::segment_crosses_triangle({0.1, 0.1, 0}, {0.3, 0.1, 0}, a, b, c));    // in its plane
+}
+
 // Signed distances and their gradients against closed forms: outside and inside, near edges and
 // corners of a mesh box (the pseudo-normals' business), moved by a pose.
 TEST(Contact, CollidersKnowTheirSignedDistance) {
@@ -1007,6 +1022,45 @@ TEST(BarrierContact, TheCollisionTestStopsTwoEdgesCrossingWhereNoPointMeetsAFace
   EXPECT_EQ(without, 1.0);
   EXPECT_LT(with, 2.0 / 3.0);
   EXPECT_GT(with, 0.55);
+}
+
+// What the detection reports of a surface through itself: the crossed ridges of the test above, stepped
+// the whole way (the ridges 0.05 through each other, no node through a face), have surface edges
+// through faces where the samples' winding numbers see nothing; before the step, none.
+TEST(BarrierContact, TheDetectionCountsSurfaceEdgesThroughAFaceWhereNoPointCrossedOne) {
+  const double pi = std::acos(-1.0), r = 0.5 * std::sqrt(2.0);
+  auto turned = [&](const std::array<double, 3>& X, int c) {  // as above
+    const bool upper = X[2] > 1.05;
+    const double zc = upper ? 1.6 : 0.5, ca = std::cos(pi / 4), sa = std::sin(pi / 4);
+    std::array<double, 3> Y = X;
+    if (!upper) {
+      const double dx = X[0] - 0.5, dz = X[2] - zc;
+      Y[0] = 0.5 + ca * dx - sa * dz + 0.125;
+      Y[2] = zc + sa * dx + ca * dz;
+    } else {
+      const double dy = X[1] - 0.5, dz = X[2] - zc;
+      Y[1] = 0.5 + ca * dy - sa * dz + 0.125;
+      Y[2] = zc + sa * dy + ca * dz + (0.5 + r + 0.1) - (1.6 - r);
+    }
+    return Y[c] - X[c];
+  };
+  for (bool barrier : {false, true}) {  // (the count is the detection's, whatever the model)
+    System sys(world(), two_blocks(), snh());
+    ContactSettings cs = block_springs(0.2);
+    cs.barrier = barrier;
+    cs.thickness = 0.02;
+    auto contact = add_springs(sys, cs);
+    auto u = sys.create_vector(), crossed = sys.create_vector();
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) { return turned(X, c); });
+    set_displacement(sys, *crossed, [&](const std::array<double, 3>& X, int c, long long) {
+      return turned(X, c) + (c == 2 && X[2] > 1.05 ? -0.15 : 0.0);
+    });
+    const ContactDetection before = contact->detect(*u);
+    EXPECT_EQ(before.edges_through_faces, 0) << "barrier " << barrier;
+    const ContactDetection after = contact->detect(*crossed);
+    EXPECT_GT(after.edges_through_faces, 0) << "barrier " << barrier;
+    EXPECT_EQ(after.crossed, 0) << "barrier " << barrier;
+  }
 }
 
 // The barrier's pair Hessians are PSD projections, except where the solver asks for every term's exact

@@ -197,7 +197,8 @@ ContactTerm::ContactTerm(const System& system, const ContactSettings& settings, 
             distance2(surface_.X[v], closest_on_triangle(surface_.X[v], surface_.X[T[0]], surface_.X[T[1]], surface_.X[T[2]], w)));
         clearance_[v] = std::min(clearance_[v], d);
       });
-  if (self_barrier() && settings_.edge_pairs) build_edges();
+  if (settings_.self) build_edges();
+  if (edge_pairs()) build_edge_pairs();
 }
 
 std::vector<std::string> ContactTerm::notes() const {
@@ -394,6 +395,7 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
   } else {
     detect_springs(at, last, keep, multipliers, slide, stats);
   }
+  stats.edges_through_faces = surface_crossings(at.surface);
   long long unpaired = stats.unpaired;
   MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
   double deepest = stats.deepest;
@@ -833,6 +835,7 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   step_.inside_depth = d.deepest;
   step_.crossed_depth = d.crossed_deepest;
   step_.inside_folded = d.folded;
+  step_.edges_through_faces = d.edges_through_faces;
   // The same pairs (sample, target triangle) as an earlier round of this step and no traction raised:
   // a solve already had these springs, so another would only go round the same cycle. (A sample stuck
   // in a crease re-entered as "inside" round after round, and two proximity pairs came and went in
@@ -940,7 +943,9 @@ void ContactTerm::load_state(const TermState& state) {
     chosen_.push_back({static_cast<int>(r[0]), static_cast<int>(r[1]), {r[2], r[3], r[4]}, {r[5], r[6], r[7]}, r[8]});
   }
   chosen_edges_.clear();
-  if (const std::vector<double>* edges = state.find_shared("edge pairs")) {
+  // (A checkpoint of a run with edge pairs restarted without them: its pairs are dropped.)
+  const std::vector<double>* edges = edge_pairs() ? state.find_shared("edge pairs") : nullptr;
+  if (edges) {
     const auto E = static_cast<double>(edges_.size());
     if (edges->size() % 2 != 0) throw InputError("contact: the checkpoint's edge pairs are malformed");
     for (std::size_t k = 0; k < edges->size(); k += 2) {
@@ -967,17 +972,17 @@ void ContactTerm::load_state(const TermState& state) {
 
 std::vector<std::string> ContactTerm::log_columns() const {
   return {"contacts", "penetration", "contact_pairs", "contact_rounds", "seconds_contact", "inside_depth", "crossed_depth",
-          "inside_folded"};
+          "inside_folded", "edges_through_faces"};
 }
 
 std::vector<double> ContactTerm::log_values(const EvaluationTotals& totals) const {
   return {static_cast<double>(totals.contacts), totals.penetration, static_cast<double>(step_.pairs),
           static_cast<double>(step_.rounds), step_.seconds, step_.inside_depth, step_.crossed_depth,
-          static_cast<double>(step_.inside_folded)};
+          static_cast<double>(step_.inside_folded), static_cast<double>(step_.edges_through_faces)};
 }
 
 std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) const {
-  if (totals.contacts == 0 && step_.pairs == 0) return {};
+  if (totals.contacts == 0 && step_.pairs == 0 && step_.edges_through_faces == 0) return {};
   char buf[320];
   std::snprintf(buf, sizeof buf, "contact: %lld pressing, deepest penetration %.3g (springs) %.3g (surface points through a face), energy %.4g",
                 totals.contacts, totals.penetration, step_.crossed_depth, totals.share(name()));
@@ -985,6 +990,10 @@ std::vector<std::string> ContactTerm::summary(const EvaluationTotals& totals) co
   if (step_.inside_folded > 0) {
     std::snprintf(buf, sizeof buf, "; %lld more surface points inside elements where the mesh folds (%.3g deep, no face crossed)",
                   step_.inside_folded, step_.inside_depth);
+    line += buf;
+  }
+  if (step_.edges_through_faces > 0) {
+    std::snprintf(buf, sizeof buf, "; %lld surface edges through a face (the surface passes through itself)", step_.edges_through_faces);
     line += buf;
   }
   return {line};

@@ -31,7 +31,7 @@ void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes,
 }  // namespace
 
 void ContactTerm::build_edges() {
-  // Every edge once, with a third of each of its triangles' reference areas (IPC's edge areas).
+  // Every edge once.
   std::vector<std::array<int, 2>> all;
   for (const auto& T : surface_.triangles)
     for (int k = 0; k < 3; ++k) all.push_back({std::min(T[k], T[(k + 1) % 3]), std::max(T[k], T[(k + 1) % 3])});
@@ -39,6 +39,35 @@ void ContactTerm::build_edges() {
   edges_.clear();
   for (const auto& e : all)
     if (edges_.empty() || edges_.back() != e) edges_.push_back(e);
+  owned_edges_.clear();
+  for (std::size_t e = 0; e < edges_.size(); ++e)
+    if (surface_.owner[edges_[e][0]] == rank_) owned_edges_.push_back(static_cast<int>(e));
+}
+
+long long ContactTerm::surface_crossings(const std::vector<Vec>& x) const {
+  const auto& T = surface_.triangles;
+  const AabbTree tree = triangle_tree(surface_, x);
+  long long mine = 0;
+  for (int e : owned_edges_) {
+    const auto& E = edges_[e];
+    Box b;
+    b.add(x[E[0]]);
+    b.add(x[E[1]]);
+    tree.descend([&](int id) { return !tree.node_box(id).overlaps(b); },
+                 [&](int t) {
+                   const auto& tri = T[t];
+                   for (int m : tri)
+                     if (m == E[0] || m == E[1]) return;  // (an edge of the triangle, or one meeting it at a corner)
+                   if (segment_crosses_triangle(x[E[0]], x[E[1]], x[tri[0]], x[tri[1]], x[tri[2]])) ++mine;
+                 });
+  }
+  long long all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_LONG_LONG, MPI_SUM, raw_comm(*system_.comm()));
+  return all;
+}
+
+void ContactTerm::build_edge_pairs() {
+  // A third of each of its triangles' reference areas (IPC's edge areas).
   edge_area_.assign(edges_.size(), 0.0);
   for (const auto& T : surface_.triangles) {
     const double a = 0.5 * norm(cross(surface_.X[T[1]] - surface_.X[T[0]], surface_.X[T[2]] - surface_.X[T[0]]));
@@ -47,12 +76,8 @@ void ContactTerm::build_edges() {
       edge_area_[std::lower_bound(edges_.begin(), edges_.end(), e) - edges_.begin()] += a / 3.0;
     }
   }
-  owned_edges_.clear();
   std::vector<int> every(edges_.size());
-  for (std::size_t e = 0; e < edges_.size(); ++e) {
-    every[e] = static_cast<int>(e);
-    if (surface_.owner[edges_[e][0]] == rank_) owned_edges_.push_back(static_cast<int>(e));
-  }
+  for (std::size_t e = 0; e < edges_.size(); ++e) every[e] = static_cast<int>(e);
   // What nearly touches at rest (on every rank alike: the surface is replicated), as clearance_ for the
   // vertices: its barrier starts at half that distance.
   const double delta = settings_.thickness;
@@ -127,7 +152,7 @@ long long ContactTerm::detect_barrier(const Positions& at, const std::vector<Cho
     chosen_.push_back({c.vertex, c.triangle, {c.beta[0], c.beta[1], c.beta[2]}, {0.0, 0.0, 0.0}, 0.0});
   }
   // The edge pairs within the margin, likewise.
-  if (!edges_.empty()) {
+  if (edge_pairs()) {
     std::vector<Box> boxes(edges_.size());
     for (std::size_t e = 0; e < edges_.size(); ++e)
       for (int v : edges_[e]) boxes[e].add(x[v]);
@@ -294,11 +319,12 @@ void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
                   fraction[v] = std::min(fraction[v], 0.9 * f);
                   for (int m : surface_.triangles[t]) fraction[m] = std::min(fraction[m], 0.9 * f);
                 });
-  limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
-                     [&](int e, int f, double t) {
-                       for (int m : edges_[e]) fraction[m] = std::min(fraction[m], 0.9 * t);
-                       for (int m : edges_[f]) fraction[m] = std::min(fraction[m], 0.9 * t);
-                     });
+  if (edge_pairs())
+    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+                       [&](int e, int f, double t) {
+                         for (int m : edges_[e]) fraction[m] = std::min(fraction[m], 0.9 * t);
+                         for (int m : edges_[f]) fraction[m] = std::min(fraction[m], 0.9 * t);
+                       });
   std::vector<double> global(fraction.size());
   MPI_Allreduce(fraction.data(), global.data(), static_cast<int>(fraction.size()), MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
   const std::vector<char> fixed = system_.fixed_owned_mask();
@@ -329,8 +355,9 @@ double ContactTerm::step_limit(const Vector& u, const Vector& du, double t_max) 
   limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
                 [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int, int, double f) { limit = std::min(limit, f); });
-  limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
-                     [&](int, int, double t) { limit = std::min(limit, t); });
+  if (edge_pairs())
+    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+                       [&](int, int, double t) { limit = std::min(limit, t); });
   double global = limit;
   MPI_Allreduce(&limit, &global, 1, MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));
   return global * t_max;

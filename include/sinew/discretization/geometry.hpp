@@ -85,6 +85,17 @@ inline double closest_on_segment(const Vec& p, const Vec& a, const Vec& b) {
 // Six times the signed volume of tetrahedron (a, b, c, d): positive when (b - a, c - a, d - a) is right-handed.
 inline double tet_volume6(const Vec& a, const Vec& b, const Vec& c, const Vec& d) { return dot(b - a, cross(c - a, d - a)); }
 
+// Whether segment pq passes through the interior of triangle abc: p and q strictly on opposite sides of
+// its plane, and the line pq strictly inside its three edges (the signs of the volumes pq makes with
+// each edge agree). Touching (an end point on the plane, the line through an edge or corner) is not a
+// crossing: what counts is a surface edge through a face, which no state of a valid surface has.
+inline bool segment_crosses_triangle(const Vec& p, const Vec& q, const Vec& a, const Vec& b, const Vec& c) {
+  const double sp = tet_volume6(a, b, c, p), sq = tet_volume6(a, b, c, q);
+  if (!((sp > 0.0 && sq < 0.0) || (sp < 0.0 && sq > 0.0))) return false;
+  const double u = tet_volume6(p, q, a, b), v = tet_volume6(p, q, b, c), w = tet_volume6(p, q, c, a);
+  return (u > 0.0 && v > 0.0 && w > 0.0) || (u < 0.0 && v < 0.0 && w < 0.0);
+}
+
 // Barycentric coordinates of p in tetrahedron (a, b, c, d); false for a degenerate one.
 inline bool tet_barycentric(const Vec& p, const Vec& a, const Vec& b, const Vec& c, const Vec& d, double l[4]) {
   const Vec e1 = b - a, e2 = c - a, e3 = d - a, r = p - a;

@@ -116,9 +116,9 @@ struct ContactSettings {
   // (dhat), and every Newton step is cut short of any vertex passing through a triangle (step_limit).
   bool barrier = false;
   // With the barrier, edge-edge pairs beside the vertex-triangle ones, in the energy and in the step
-  // limit: without them two edges can pass through each other with no vertex crossing a face. Off by
-  // default: on BCN_Epileptic's clip they left a point inverted behind the knee at 8 frame ends
-  // (docs/performance.md, "Edge-edge pairs for the barrier").
+  // limit: without them two edges can pass through each other with no vertex crossing a face (the
+  // scene's default is on: docs/performance.md, "Surfaces through themselves"; off here, as a bare
+  // ContactSettings is the paper's springs).
   bool edge_pairs = false;
 };
 
@@ -139,6 +139,7 @@ struct ContactDetection {
   // report gives).
   long long folded = 0, crossed = 0;
   double crossed_deepest = 0.0;
+  long long edges_through_faces = 0;  // surface edges through a face (ContactTerm::surface_crossings)
   double seconds = 0.0;
 };
 
@@ -225,6 +226,7 @@ class ContactTerm final : public EnergyTerm {
     double seconds = 0.0, inside_depth = 0.0;
     double crossed_depth = 0.0;  // inside_depth without the samples inside folded elements (ContactDetection)
     long long inside_folded = 0;
+    long long edges_through_faces = 0;
   };
   const StepCounts& step_counts() const { return step_; }
 
@@ -249,6 +251,7 @@ class ContactTerm final : public EnergyTerm {
  private:
   // Self contact by the barrier (not springs): its step limit, its projected pair Hessians.
   bool self_barrier() const { return settings_.self && settings_.barrier; }
+  bool edge_pairs() const { return self_barrier() && settings_.edge_pairs; }
 
   const System& system_;
   ContactSettings settings_;
@@ -268,12 +271,13 @@ class ContactTerm final : public EnergyTerm {
   std::vector<Chosen> chosen_;
   // The barrier's edge-edge pairs of the last pass (edge indices, first < second; the same on every rank).
   std::vector<std::array<int, 2>> chosen_edges_, committed_chosen_edges_;
-  // The surface's edges (vertex pairs, first < second), each one's share of the reference area (a third
-  // of its triangles') and its distance at rest to the nearest edge it shares no vertex with (at most
-  // the thickness); the edges whose first vertex this rank owns.
+  // The surface's edges (vertex pairs, first < second) and those whose first vertex this rank owns
+  // (with self contact); with edge pairs, each one's share of the reference area (a third of its
+  // triangles') and its distance at rest to the nearest edge it shares no vertex with (at most the
+  // thickness).
   std::vector<std::array<int, 2>> edges_;
-  std::vector<double> edge_area_, edge_clearance_;
   std::vector<int> owned_edges_;
+  std::vector<double> edge_area_, edge_clearance_;
   bool fresh_start_ = true;  // the next step's first detection pairs afresh (none yet, or after a failed attempt)
   // Per round of this step: its pairs (sample, triangle; sorted) and the deepest sample inside.
   std::vector<std::pair<std::vector<std::pair<int, int>>, double>> round_pairs_;
@@ -313,7 +317,12 @@ class ContactTerm final : public EnergyTerm {
   double edge_dhat(int e, int f) const {
     return std::min(settings_.thickness, 0.5 * std::min(edge_clearance_[e], edge_clearance_[f]));
   }
-  void build_edges();  // edges_, edge_area_, edge_clearance_, owned_edges_
+  void build_edges();       // edges_, owned_edges_
+  void build_edge_pairs();  // edge_area_, edge_clearance_
+  // The owned surface edges that pass through a face of the surface at x (geom::segment_crosses_triangle),
+  // summed over the ranks (collective): a state with none has no surface through another, which the
+  // samples' winding numbers alone cannot tell (two edges can cross with no vertex behind a face).
+  long long surface_crossings(const std::vector<geom::Vec>& x) const;
   // The barrier's dhat for surface vertex v: the thickness, or half the vertex's clearance at rest.
   double barrier_dhat(int v) const { return std::min(settings_.thickness, 0.5 * clearance_[v]); }
   void commit();
