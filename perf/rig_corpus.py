@@ -13,7 +13,7 @@ short, the share in the tail (|F| below 1000 times the tolerance), and the steps
 pulled back with their share; scripts/sinew-anatomy) and writes rigs.json and rigs.md in --out. --quick runs the
 first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
 frames with no inverted point at a frame end (quasi-static or with inertia), its deepest penetration
-below the contact thickness (0.05 cells), no surface edge through a face at a frame end, its volume
+below 0.05 cells (the springs' thickness; the barrier's is 0.15), no surface edge through a face at a frame end, its volume
 within 2% of the rest's, and newton.csv holding as many of the frames' Newton iterations as log.csv
 counts."""
 import argparse, csv, json, os, re, subprocess, sys, time

@@ -59,7 +59,11 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
   ContactSettings cs;
   cs.self = p.self;
   cs.stiffness = p.stiffness > 0.0 ? p.stiffness : 10.0 * system.stiffness_scale() / h;
-  cs.thickness = p.thickness > 0.0 ? p.thickness : 0.05 * h;
+  cs.barrier = p.model == ContactParameters::Model::Barrier;
+  // The barrier's self contact starts three times farther out than the springs push: at 0.05 h, with
+  // edge pairs, the crease behind BCN_Epileptic's knee closed on a cell until a point inverted; at 0.15 h
+  // the crease's pairs engage sooner and share the load (docs/performance.md, "A thicker barrier").
+  cs.thickness = p.thickness > 0.0 ? p.thickness : (p.self && cs.barrier ? 0.15 : 0.05) * h;
   cs.margin = p.margin > 0.0 ? p.margin : cs.thickness + 0.5 * h;
   if (!(cs.margin > cs.thickness))
     throw InputError("Contact: 'Margin' (" + format_number(cs.margin) + ") must exceed the thickness (" + format_number(cs.thickness) + ")");
@@ -67,7 +71,6 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
   cs.keep = p.keep;
   cs.rounds = p.rounds;
   cs.onset = p.smooth ? cs.thickness : 0.0;
-  cs.barrier = p.model == ContactParameters::Model::Barrier;
   cs.edge_pairs = p.edge_pairs;
   auto term = std::make_shared<ContactTerm>(system, cs, colliders->shapes());
   term->set_pose_source([colliders](std::size_t k, double t) { return colliders->pose(k, t); });

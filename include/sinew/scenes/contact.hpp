@@ -85,7 +85,8 @@ struct ContactParameters {
             "penalty stiffness k: traction per unit of penetration (0: 10 (mu_L + lambda_L) / h, h the mean edge length)",
             Range::non_negative());
     v.entry("Thickness", thickness, 0.0,
-            "the gap below which the springs push (0: 0.05 h); the deepest penetration is reported per step",
+            "the gap below which the springs push, or where the barrier starts (0: 0.05 h, with the barrier's self "
+            "contact 0.15 h); the deepest penetration is reported per step",
             Range::non_negative());
     v.entry("Margin", margin, 0.0,
             "self contact: surface points this close to the surface are paired before they touch (0: thickness + h / 2)",
@@ -160,8 +161,9 @@ class Colliders {
 
 // The contact term of a scene (collective): ContactSettings from the section, automatic values scaled
 // with the stiffest law and the mesh (a traction of mu_L + lambda_L pushes a surface point in by a
-// tenth of a cell; thickness 0.05 h; margin thickness + h / 2), collider poses from `colliders` (which
-// the term keeps). Throws InputError ("Contact: ...") for a margin not above the thickness.
+// tenth of a cell; thickness 0.05 h, 0.15 h for the barrier's self contact; margin thickness + h / 2),
+// collider poses from `colliders` (which the term keeps). Throws InputError ("Contact: ...") for a
+// margin not above the thickness.
 std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const System& system,
                                                std::shared_ptr<const Colliders> colliders);
 
