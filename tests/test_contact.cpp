@@ -95,6 +95,29 @@ void press(const System& sys, Vector& u, double push) {
   });
 }
 
+// The two blocks turned into ridges that cross like an X, component c of the displacement of reference
+// point X. Lower block (4 x 4 x 4 cells of 0.25): turned 45 degrees about y through its centre and moved
+// to put its ridge at x = 0.625, z = 0.5 + r. Upper block: turned 45 degrees about x through its centre,
+// its ridge at y = 0.625, 0.1 above the lower one. Each ridge crosses the other half-way between two of
+// its nodes.
+double crossed_ridges(const std::array<double, 3>& X, int c) {
+  const double pi = std::acos(-1.0), r = 0.5 * std::sqrt(2.0);
+  const bool upper = X[2] > 1.05;
+  const double zc = upper ? 1.6 : 0.5, ca = std::cos(pi / 4), sa = std::sin(pi / 4);
+  std::array<double, 3> Y = X;
+  if (!upper) {  // about y: (x, z) -> the ridge from the edge x = 1, z = 1
+    const double dx = X[0] - 0.5, dz = X[2] - zc;
+    Y[0] = 0.5 + ca * dx - sa * dz + 0.125;
+    Y[2] = zc + sa * dx + ca * dz;
+  } else {  // about x: (y, z) -> the ridge from the edge y = 0, z = 1.1
+    const double dy = X[1] - 0.5, dz = X[2] - zc;
+    Y[1] = 0.5 + ca * dy - sa * dz + 0.125;
+    Y[2] = zc + sa * dy + ca * dz;
+    Y[2] += (0.5 + r + 0.1) - (1.6 - r);
+  }
+  return Y[c] - X[c];
+}
+
 }  // namespace
 
 // E, dE/du and d2E/du2 of the whole system with springs in place (elastic exact, so that finite
@@ -981,27 +1004,6 @@ TEST(BarrierContact, TheTermHasTheGradientOfItsEnergyAndLimitsSteps) {
 // one: no vertex comes near a face before the ridges' edges meet, so the vertex-face collision test
 // alone lets the whole step through; with edge pairs it stops the step short of the crossing.
 TEST(BarrierContact, TheCollisionTestStopsTwoEdgesCrossingWhereNoPointMeetsAFace) {
-  const double pi = std::acos(-1.0), r = 0.5 * std::sqrt(2.0);
-  // Lower block (4 x 4 x 4 cells of 0.25): turned 45 degrees about y through its centre and moved to
-  // put its ridge at x = 0.625, z = 0.5 + r. Upper block: turned 45 degrees about x through its centre,
-  // its ridge at y = 0.625, 0.1 above the lower one. Each ridge crosses the other half-way between two
-  // of its nodes.
-  auto turned = [&](const std::array<double, 3>& X, int c) {
-    const bool upper = X[2] > 1.05;
-    const double zc = upper ? 1.6 : 0.5, ca = std::cos(pi / 4), sa = std::sin(pi / 4);
-    std::array<double, 3> Y = X;
-    if (!upper) {  // about y: (x, z) -> the ridge from the edge x = 1, z = 1
-      const double dx = X[0] - 0.5, dz = X[2] - zc;
-      Y[0] = 0.5 + ca * dx - sa * dz + 0.125;
-      Y[2] = zc + sa * dx + ca * dz;
-    } else {  // about x: (y, z) -> the ridge from the edge y = 0, z = 1.1
-      const double dy = X[1] - 0.5, dz = X[2] - zc;
-      Y[1] = 0.5 + ca * dy - sa * dz + 0.125;
-      Y[2] = zc + sa * dy + ca * dz;
-      Y[2] += (0.5 + r + 0.1) - (1.6 - r);
-    }
-    return Y[c] - X[c];
-  };
   auto limit = [&](bool edges) {
     System sys(world(), two_blocks(), snh());
     ContactSettings cs = block_springs(0.2);
@@ -1010,7 +1012,7 @@ TEST(BarrierContact, TheCollisionTestStopsTwoEdgesCrossingWhereNoPointMeetsAFace
     cs.edge_pairs = edges;
     auto contact = add_springs(sys, cs);
     auto u = sys.create_vector(), down = sys.create_vector();
-    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) { return turned(X, c); });
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) { return crossed_ridges(X, c); });
     set_displacement(sys, *down, [&](const std::array<double, 3>& X, int c, long long) { return c == 2 && X[2] > 1.05 ? -0.15 : 0.0; });
     contact->detect(*u);
     sys.update_pattern();
@@ -1028,22 +1030,6 @@ TEST(BarrierContact, TheCollisionTestStopsTwoEdgesCrossingWhereNoPointMeetsAFace
 // the whole way (the ridges 0.05 through each other, no node through a face), have surface edges
 // through faces where the samples' winding numbers see nothing; before the step, none.
 TEST(BarrierContact, TheDetectionCountsSurfaceEdgesThroughAFaceWhereNoPointCrossedOne) {
-  const double pi = std::acos(-1.0), r = 0.5 * std::sqrt(2.0);
-  auto turned = [&](const std::array<double, 3>& X, int c) {  // as above
-    const bool upper = X[2] > 1.05;
-    const double zc = upper ? 1.6 : 0.5, ca = std::cos(pi / 4), sa = std::sin(pi / 4);
-    std::array<double, 3> Y = X;
-    if (!upper) {
-      const double dx = X[0] - 0.5, dz = X[2] - zc;
-      Y[0] = 0.5 + ca * dx - sa * dz + 0.125;
-      Y[2] = zc + sa * dx + ca * dz;
-    } else {
-      const double dy = X[1] - 0.5, dz = X[2] - zc;
-      Y[1] = 0.5 + ca * dy - sa * dz + 0.125;
-      Y[2] = zc + sa * dy + ca * dz + (0.5 + r + 0.1) - (1.6 - r);
-    }
-    return Y[c] - X[c];
-  };
   for (bool barrier : {false, true}) {  // (the count is the detection's, whatever the model)
     System sys(world(), two_blocks(), snh());
     ContactSettings cs = block_springs(0.2);
@@ -1051,9 +1037,9 @@ TEST(BarrierContact, TheDetectionCountsSurfaceEdgesThroughAFaceWhereNoPointCross
     cs.thickness = 0.02;
     auto contact = add_springs(sys, cs);
     auto u = sys.create_vector(), crossed = sys.create_vector();
-    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) { return turned(X, c); });
+    set_displacement(sys, *u, [&](const std::array<double, 3>& X, int c, long long) { return crossed_ridges(X, c); });
     set_displacement(sys, *crossed, [&](const std::array<double, 3>& X, int c, long long) {
-      return turned(X, c) + (c == 2 && X[2] > 1.05 ? -0.15 : 0.0);
+      return crossed_ridges(X, c) + (c == 2 && X[2] > 1.05 ? -0.15 : 0.0);
     });
     const ContactDetection before = contact->detect(*u);
     EXPECT_EQ(before.edges_through_faces, 0) << "barrier " << barrier;
