@@ -395,7 +395,6 @@ ContactDetection ContactTerm::detect(const Vector& u, bool keep, bool multiplier
   } else {
     detect_springs(at, last, keep, multipliers, slide, stats);
   }
-  stats.edges_through_faces = surface_crossings(at.surface);
   long long unpaired = stats.unpaired;
   MPI_Allreduce(&unpaired, &stats.unpaired, 1, MPI_LONG_LONG, MPI_SUM, comm);
   double deepest = stats.deepest;
@@ -835,7 +834,6 @@ RoundResult ContactTerm::round(const Vector& u, int round) {
   step_.inside_depth = d.deepest;
   step_.crossed_depth = d.crossed_deepest;
   step_.inside_folded = d.folded;
-  step_.edges_through_faces = d.edges_through_faces;
   // The same pairs (sample, target triangle) as an earlier round of this step and no traction raised:
   // a solve already had these springs, so another would only go round the same cycle. (A sample stuck
   // in a crease re-entered as "inside" round after round, and two proximity pairs came and went in
@@ -883,9 +881,14 @@ std::string ContactTerm::regroup(const Vector& u) {
   return buf;
 }
 
-void ContactTerm::end_step(const Vector&) {
+void ContactTerm::end_step(const Vector& u) {
   commit();
   fresh_start_ = false;
+  if (settings_.self) {  // what the step's report gives: the surface at the converged state, once a step
+    Positions at(system_, u);
+    gather_surface(at);
+    step_.edges_through_faces = surface_crossings(at.surface);
+  }
 }
 
 // A failed solve: the next attempt pairs afresh at its first guess (round()), carrying the tractions

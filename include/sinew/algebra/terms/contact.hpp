@@ -139,7 +139,6 @@ struct ContactDetection {
   // report gives).
   long long folded = 0, crossed = 0;
   double crossed_deepest = 0.0;
-  long long edges_through_faces = 0;  // surface edges through a face (ContactTerm::surface_crossings)
   double seconds = 0.0;
 };
 
@@ -226,7 +225,7 @@ class ContactTerm final : public EnergyTerm {
     double seconds = 0.0, inside_depth = 0.0;
     double crossed_depth = 0.0;  // inside_depth without the samples inside folded elements (ContactDetection)
     long long inside_folded = 0;
-    long long edges_through_faces = 0;
+    long long edges_through_faces = 0;  // at the step's end (end_step; surface_crossings)
   };
   const StepCounts& step_counts() const { return step_; }
 
