@@ -6,16 +6,16 @@ clip's end, quasi-static (one load step per frame at 24 fps) and with inertia (b
     perf/rig_corpus.py --sinew build/sinew --out results/perf/rigs [--only NAME,...] [--modes M,...] [--quick] [--check]
 
 Prints one line per run (frames done, Newton and CG per frame, seconds per frame, inverted points,
-deepest penetration, surface points inside elements where the mesh folds (no face crossed), surface edges
-through a face (the surface through itself), volume change,
-and where the Newton iterations went: the share whose step the contact barrier's collision test held
-short, the share in the tail (|F| below 1000 times the tolerance), and the steps whose first guess it
-pulled back with their share; scripts/sinew-anatomy) and writes rigs.json and rigs.md in --out. --quick runs the
-first quarter of each clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its
-frames with no inverted point at a frame end (quasi-static or with inertia), its deepest penetration
-below 0.05 cells (the springs' thickness; the barrier's is 0.15), no surface edge through a face at a frame end, its volume
-within 2% of the rest's, and newton.csv holding as many of the frames' Newton iterations as log.csv
-counts."""
+deepest penetration, surface points inside elements where the mesh folds (no face crossed), surface
+edges through a face (the surface through itself), volume change, and where the Newton iterations went:
+the share whose step the contact barrier's collision test held short, the share in the tail (|F| below
+1000 times the tolerance), and the steps whose first guess it pulled back with their share;
+scripts/sinew-anatomy) and writes rigs.json and rigs.md in --out. --quick runs the first quarter of each
+clip. --check (CTest rig_corpus_small) fails unless each run exits 0 after all its frames with no
+inverted point at a frame end (quasi-static or with inertia), its deepest penetration below 0.05 cells
+(the springs' thickness; the barrier's is 0.15), no surface edge through a face at a frame end, its
+volume within 2% of the rest's, and newton.csv holding as many of the frames' Newton iterations as
+log.csv counts."""
 import argparse, csv, json, os, re, subprocess, sys, time
 from importlib.machinery import SourceFileLoader
 
