@@ -648,7 +648,6 @@ TEST(PreconditionerLag, EveryTransition) {
   }
   EXPECT_EQ(every.updates(), 3);
   EXPECT_EQ(budget, -1);  // never limited
-  EXPECT_FALSE(every.redo(false, 1.0));
 
   PreconditionerLag lag(true, 1.5);
   lag.start();
@@ -661,7 +660,6 @@ TEST(PreconditionerLag, EveryTransition) {
   EXPECT_FALSE(lag.update(10.0, 1e-4, budget));
   EXPECT_EQ(budget, 60);  // 4 digits asked
   lag.solved(28, 1e-4, true, 10.0);  // 7 per digit, within 1.5 x 5: kept again
-  EXPECT_FALSE(lag.redo(true, 10.0));
   lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(5.0, 1e-2, budget));
   lag.solved(16, 1e-2, true, 5.0);  // 8 per digit, slower than 1.5 x 5: the next one updates
@@ -677,27 +675,28 @@ TEST(PreconditionerLag, EveryTransition) {
   EXPECT_FALSE(lag.update(1.0, 1e-2, budget));
   EXPECT_EQ(budget, PreconditionerLag::min_budget);
 
-  // A kept solve over budget: redone with an update, and nothing kept until the residual is ten times
-  // below the failure's.
-  lag.solved(PreconditionerLag::min_budget, 1e-2, false, 1.0);
-  EXPECT_TRUE(lag.redo(true, 1.0));
-  EXPECT_EQ(lag.redos(), 1);
-  EXPECT_FALSE(lag.redo(true, 1.0));  // asked once per failure
-  EXPECT_TRUE(lag.update(1.0, 1e-2, budget));
-  lag.solved(10, 1e-2, true, 1.0);
+  // A kept solve over budget: retried at once with an update (RetryingSolve), whose solve sets the new
+  // baseline, and nothing kept until the residual is ten times below the failure's.
+  const int updates = lag.updates();
+  lag.retried(1.0, false);
+  EXPECT_FALSE(lag.kept());
+  EXPECT_EQ(lag.retries(), 1);
+  EXPECT_EQ(lag.updates(), updates + 1);
+  lag.solved(10, 1e-2, true, 1.0);  // the repeated solve: 5 per digit
   lag.stepped(1.0, 0.0);
   EXPECT_TRUE(lag.update(0.2, 1e-2, budget));  // not yet ten times below 1.0
   lag.solved(10, 1e-2, true, 0.2);
   lag.stepped(1.0, 0.0);
   EXPECT_FALSE(lag.update(0.05, 1e-2, budget));
-  // A kept direction that does not descend: redone too.
+  EXPECT_EQ(budget, 30);
+  // A kept direction that does not descend is retried too; one retried for an exact Hessian is kept for
+  // the next exact one.
+  lag.retried(0.05, true);
   lag.solved(10, 1e-2, true, 0.05);
-  EXPECT_TRUE(lag.redo(false, 0.05));
-  EXPECT_EQ(lag.redos(), 2);
-  // ... while one from an updated preconditioner is the line search's business, not a redo.
-  EXPECT_TRUE(lag.update(0.001, 1e-2, budget));
+  lag.stepped(1.0, 0.0);
+  EXPECT_EQ(lag.retries(), 2);
+  EXPECT_FALSE(lag.update(0.001, 1e-2, budget, /*exact=*/true));
   lag.solved(10, 1e-2, true, 0.001);
-  EXPECT_FALSE(lag.redo(false, 0.001));
   // A new solve forgets the failures of the last; a new linear solver forgets the baseline.
   lag.stepped(1.0, 0.0);
   lag.start();

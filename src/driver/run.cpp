@@ -423,9 +423,10 @@ void Simulation::checkpoint() {
 
 void Simulation::print_step(const StepRecord& rec) const {
   if (!talk_) return;
-  // Newton iterations redone because a kept preconditioner had aged (PreconditionerLag).
-  std::string redone = rec.solve.redone_iterations > 0 ? ", " + std::to_string(rec.solve.redone_iterations) + " redone" : "";
-  // ... and those redone with projection because the exact Hessian's CG ran over budget (ExactSolveBudget).
+  // Linear solves repeated within their Newton iteration because a kept preconditioner had aged
+  // (PreconditionerLag).
+  std::string redone = rec.solve.retried_solves > 0 ? ", " + std::to_string(rec.solve.retried_solves) + " CG retried" : "";
+  // Newton iterations redone with projection because the exact Hessian's CG ran over budget (ExactSolveBudget).
   if (rec.solve.exact_over_budget > 0) redone += ", " + std::to_string(rec.solve.exact_over_budget) + " exact over CG budget";
   // Nodes the relaxation after Newton steps moved ('Solver/Node relaxation').
   const std::string relaxed = rec.solve.relaxed_nodes > 0 ? " (" + std::to_string(rec.solve.relaxed_nodes) + " nodes relaxed)" : "";

@@ -23,6 +23,8 @@
 #include <Stratimikos_MueLuHelpers.hpp>
 #include <Teuchos_TimeMonitor.hpp>
 #include <Thyra_LinearOpWithSolveFactoryHelpers.hpp>
+#include <Thyra_MultiVectorStdOps.hpp>
+#include <Thyra_VectorStdOps.hpp>
 #include <Thyra_StateFuncModelEvaluatorBase.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Tpetra_CrsMatrix.hpp>
@@ -88,12 +90,57 @@ struct SolveState {
   ExactSolveBudget* exact_budget = nullptr;   // the solver's, kept across solves
   bool last_solve_converged = true;           // whether the last linear solve met its tolerance
   int exact_over_budget = 0;                  // exact solves over their CG budget, redone projected
+  // CG iterations of a kept preconditioner's failed solve that the last linear solve repeated with an
+  // updated one (RetryingSolve): counted in its iterations, not in the new preconditioner's baseline.
+  int retried_iterations = 0;
 };
 
 // The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
 // updated (the inner factory's initializeOp) or kept (its initializeAndReuseOp, which Belos implements
 // by keeping the preconditioner object and changing only the operator) within a CG budget, as
 // PreconditionerLag says.
+class LaggedSolveFactory;
+
+// The linear solver of one Jacobian as NOX's group holds it: Belos's, wrapped so that a solve with a kept
+// preconditioner that fails (over its CG budget, or a direction that does not descend) is repeated at
+// once with the preconditioner updated for the same matrix. Redone by the line search instead, as it
+// was, such a failure cost an evaluation at the old state, an assembly and a Newton iteration: 42 of
+// BCN_Epileptic's 874 with inertia, 20 of the BVH jump's 612.
+class RetryingSolve : public Thyra::LinearOpWithSolveBase<double> {
+ public:
+  RetryingSolve(Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> inner, const LaggedSolveFactory& factory)
+      : inner_(std::move(inner)), factory_(factory) {}
+  Thyra::LinearOpWithSolveBase<double>* inner() const { return inner_.get(); }
+  // What the last initialization set up from, for the repeat; whether it kept the preconditioner.
+  Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> source;
+  Thyra::ESupportSolveUse use = Thyra::SUPPORT_SOLVE_UNSPECIFIED;
+  bool kept = false;
+
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> range() const override { return inner_->range(); }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> domain() const override { return inner_->domain(); }
+
+ protected:
+  bool opSupportedImpl(Thyra::EOpTransp t) const override { return inner_->opSupported(t); }
+  void applyImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& X, const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& Y,
+                 const double alpha, const double beta) const override {
+    inner_->apply(t, X, Y, alpha, beta);
+  }
+  bool solveSupportsImpl(Thyra::EOpTransp t) const override { return inner_->solveSupports(t); }
+  bool solveSupportsNewImpl(Thyra::EOpTransp t, const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c) const override {
+    return inner_->solveSupports(t, c);
+  }
+  bool solveSupportsSolveMeasureTypeImpl(Thyra::EOpTransp t, const Thyra::SolveMeasureType& m) const override {
+    return inner_->solveSupportsSolveMeasureType(t, m);
+  }
+  Thyra::SolveStatus<double> solveImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
+                                       const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
+                                       const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c) const override;
+
+ private:
+  Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> inner_;
+  const LaggedSolveFactory& factory_;
+};
+
 class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
  public:
   // `state` gives the running solve's state (the lag, the current residual, the tolerance).
@@ -105,39 +152,56 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
   }
 
   bool isCompatible(const Thyra::LinearOpSourceBase<double>& src) const override { return inner_->isCompatible(src); }
-  Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> createOp() const override { return inner_->createOp(); }
+  Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> createOp() const override {
+    return Teuchos::rcp(new RetryingSolve(inner_->createOp(), *this));
+  }
   void initializeOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
                     Thyra::LinearOpWithSolveBase<double>* op, const Thyra::ESupportSolveUse use) const override {
-    // Belos re-reads its solver's parameters at every initialization: the budget applies to this solve.
     int budget = max_iterations_;
     const SolveState& s = state_();
     s.finish_tolerance();
     const bool update = !s.lag || s.lag->update(s.last_f_norm, s.linear_tolerance(), budget, s.policy.last_exact());
-    // Fault injection for the tests of the redo path: a CG budget that no kept solve meets.
+    // Fault injection for the tests of the retry path: a CG budget that no kept solve meets.
     if (const char* forced = std::getenv("SINEW_KEPT_CG_BUDGET"); forced && !update) budget = std::atoi(forced);
-    if (s.exact_budget && s.policy.last_exact()) {
-      budget = std::min(budget, s.exact_budget->budget(s.linear_tolerance(), max_iterations_));
-      // Fault injection for the tests of the redo path: a budget no exact solve meets.
-      if (const char* forced = std::getenv("SINEW_EXACT_CG_BUDGET")) budget = std::atoi(forced);
-    }
-    solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
+    set_budget(s, budget);
     trace_memory("matrix assembled");
+    auto* retrying = dynamic_cast<RetryingSolve*>(op);
+    Thyra::LinearOpWithSolveBase<double>* inner = retrying ? retrying->inner() : op;
     if (update)
-      inner_->initializeOp(src, op, use);
+      inner_->initializeOp(src, inner, use);
     else
-      inner_->initializeAndReuseOp(src, op);
+      inner_->initializeAndReuseOp(src, inner);
+    if (retrying) {
+      retrying->source = src;
+      retrying->use = use;
+      retrying->kept = !update;
+    }
     trace_memory(update ? "preconditioner set up" : "preconditioner kept");
   }
   void initializeAndReuseOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
                             Thyra::LinearOpWithSolveBase<double>* op) const override {
-    inner_->initializeAndReuseOp(src, op);
+    auto* retrying = dynamic_cast<RetryingSolve*>(op);
+    inner_->initializeAndReuseOp(src, retrying ? retrying->inner() : op);
   }
   void uninitializeOp(Thyra::LinearOpWithSolveBase<double>* op, Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* src,
                       Teuchos::RCP<const Thyra::PreconditionerBase<double>>* prec,
                       Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* approx,
                       Thyra::ESupportSolveUse* use) const override {
-    inner_->uninitializeOp(op, src, prec, approx, use);
+    auto* retrying = dynamic_cast<RetryingSolve*>(op);
+    inner_->uninitializeOp(retrying ? retrying->inner() : op, src, prec, approx, use);
   }
+
+  // A kept preconditioner's solve failed: the preconditioner updated for the same Jacobian, and the
+  // solve's budget as for an updated one.
+  void update_for_retry(RetryingSolve& op) const {
+    const SolveState& s = state_();
+    s.lag->retried(s.last_f_norm, s.policy.last_exact());
+    set_budget(s, max_iterations_);
+    inner_->initializeOp(op.source, op.inner(), op.use);
+    op.kept = false;
+    trace_memory("preconditioner updated for a retry");
+  }
+  SolveState& state() const { return const_cast<SolveState&>(state_()); }
   void setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& p) override { inner_->setParameterList(p); }
   Teuchos::RCP<Teuchos::ParameterList> getNonconstParameterList() override { return inner_->getNonconstParameterList(); }
   Teuchos::RCP<Teuchos::ParameterList> unsetParameterList() override { return inner_->unsetParameterList(); }
@@ -150,10 +214,44 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     Teuchos::ParameterList& belos = *inner_->getNonconstParameterList();
     return belos.sublist("Solver Types").sublist(belos.get<std::string>("Solver Type"));
   }
+  // Belos re-reads its solver's parameters at every initialization: the budget applies to the coming
+  // solve, within an exact Hessian's (ExactSolveBudget).
+  void set_budget(const SolveState& s, int budget) const {
+    if (s.exact_budget && s.policy.last_exact()) {
+      budget = std::min(budget, s.exact_budget->budget(s.linear_tolerance(), max_iterations_));
+      // Fault injection for the tests of the redo path: a budget no exact solve meets.
+      if (const char* forced = std::getenv("SINEW_EXACT_CG_BUDGET")) budget = std::atoi(forced);
+    }
+    solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
+  }
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner_;
   std::function<const SolveState&()> state_;
   int max_iterations_ = 1000;
 };
+
+Thyra::SolveStatus<double> RetryingSolve::solveImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
+                                                    const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
+                                                    const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c) const {
+  SolveState& s = factory_.state();
+  s.retried_iterations = 0;
+  Thyra::SolveStatus<double> status = inner_->solve(t, B, X, c);
+  if (!kept || !s.lag || B.domain()->dim() != 1) return status;
+  // NOX solves J x = F for the direction -x: it descends where F . x > 0.
+  const bool converged = status.solveStatus == Thyra::SOLVE_STATUS_CONVERGED;
+  if (converged && Thyra::scalarProd(*B.col(0), *X->col(0)) > 0.0) return status;
+  auto count = [](const Thyra::SolveStatus<double>& st) {
+    return st.extraParameters.is_null() ? 0 : st.extraParameters->get("Iteration Count", 0);
+  };
+  const int first = count(status);
+  factory_.update_for_retry(const_cast<RetryingSolve&>(*this));
+  Thyra::assign(X, 0.0);
+  status = inner_->solve(t, B, X, c);
+  // Both solves' CG in the iteration's count; the first's noted apart for the new baseline.
+  if (status.extraParameters.is_null()) status.extraParameters = Teuchos::parameterList();
+  status.extraParameters->set("Iteration Count", first + count(status));
+  s.retried_iterations = first;
+  return status;
+}
 
 // ---------------------------------------------------------------------------------------------
 // The model: x = nodal displacements (Dirichlet entries prescribed), f = dE/du (zero in Dirichlet
@@ -329,9 +427,8 @@ class EnergyMerit : public NOX::MeritFunction::Generic {
 //
 // A direction that does not descend (slope >= 0) is never stepped along. From the exact Hessian it
 // means the state is not in the quadratic region yet: the policy falls back to projection and the
-// iteration is redone from the same state (step 0); from the projected Hessian it is a failure. Before
-// either, a direction from a kept preconditioner whose solve failed or that does not descend is redone
-// with an updated preconditioner.
+// iteration is redone from the same state (step 0); from the projected Hessian it is a failure. (A kept
+// preconditioner's direction that does not descend never gets here: RetryingSolve repeats its solve.)
 class EnergyBacktrack : public NOX::LineSearch::Generic {
  public:
   EnergyBacktrack(const ElasticModel& model, Teuchos::ParameterList& bt, double max_step, double relax_share)
@@ -360,9 +457,6 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       grp.computeF();
       return redo;
     };
-    // A direction from a kept preconditioner that failed (PreconditionerLag): redo it with an updated
-    // one, from the same state, before anything else is decided about it.
-    if (state.lag && state.lag->redo(slope < 0.0, F0)) return stay(true);
     // An exact solve over its CG budget (ExactSolveBudget): the state is not where the exact Hessian is
     // positive definite yet; redo the iteration with the projected one.
     if (state.policy.last_exact() && !state.last_solve_converged) {
@@ -489,10 +583,11 @@ class ProgressObserver : public NOX::Observer {
       const auto& ls = stats->linearSolve;
       state.last_solve_converged = ls.lastLinearSolve_Converged;
       if (state.lag)
-        state.lag->solved(ls.lastLinearSolve_NumIterations, state.linear_tolerance(), ls.lastLinearSolve_Converged,
-                          solver.getPreviousSolutionGroup().getNormF());
+        state.lag->solved(ls.lastLinearSolve_NumIterations - state.retried_iterations, state.linear_tolerance(),
+                          ls.lastLinearSolve_Converged, solver.getPreviousSolutionGroup().getNormF());
       if (state.exact_budget && !state.policy.last_exact())
-        state.exact_budget->projected_solved(ls.lastLinearSolve_NumIterations, state.linear_tolerance(), ls.lastLinearSolve_Converged);
+        state.exact_budget->projected_solved(ls.lastLinearSolve_NumIterations - state.retried_iterations, state.linear_tolerance(),
+                                             ls.lastLinearSolve_Converged);
     }
     t_ls_ = Clock::now();
     asm_before_ls_ = model_.state().seconds_assembly;
@@ -735,7 +830,7 @@ struct NonlinearSolver::Impl {
     auto strat = Teuchos::rcp(new Teuchos::ParameterList(default_stratimikos()));
     strat->set("Preconditioner Type", std::string(stratimikos_name(p.preconditioner)));
     overlay(*strat, p.stratimikos);
-    // Without a preconditioner there is nothing to keep (and a redone iteration would repeat itself).
+    // Without a preconditioner there is nothing to keep (and a retried solve would repeat itself).
     lag = PreconditionerLag(p.update == SolverParameters::Update::WhenNeeded && strat->get<std::string>("Preconditioner Type") != "None",
                             p.update_factor);
     if (strat->get<std::string>("Preconditioner Type") == "MueLu") {
@@ -825,7 +920,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   state.exact_budget = &m.exact_budget;
   if (!(reference > 0.0)) m.step_held = false;  // a load step's first solve; a later one goes on
   state.last_step_held = &m.step_held;
-  const int updates_before = m.lag.updates(), redos_before = m.lag.redos();
+  const int updates_before = m.lag.updates(), retries_before = m.lag.retries();
   m.follow_pattern();
   m.model->attach(&state);
   auto x = Thyra::createVector(Teuchos::rcpFromRef(u), Thyra::createVectorSpace<double, LO, GO, NodeType>(u.getMap()));
@@ -920,7 +1015,7 @@ SolveReport NonlinearSolver::solve_once(Vector& u, const std::function<void(cons
   }
   report.exact_hessian_used = state.policy.exact_used();
   report.preconditioner_updates = m.lag.updates() - updates_before;
-  report.redone_iterations = m.lag.redos() - redos_before;
+  report.retried_solves = m.lag.retries() - retries_before;
   report.exact_over_budget = state.exact_over_budget;
   report.relaxed_nodes = state.relaxed_nodes;
   report.exact_hessian_fell_back = state.policy.fell_back();
@@ -963,36 +1058,31 @@ SolveReport NonlinearSolver::tangent(const Vector& u0, Vector& trial, double ene
       m.group->setX(x0);
     m.lag.start();
     auto solution = x0.clone(NOX::ShapeCopy);
-    // A kept preconditioner that fails its budget is updated and the solve redone, once.
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      if (attempt > 0) m.group->setX(x0);  // a new Jacobian, so that the solver is initialized again
-      m.group->computeJacobian();
-      state.last_f_norm = rhs.norm2();
-      auto b = Thyra::createVector(Teuchos::rcpFromRef(rhs), xt->space());
-      NOX::Thyra::Vector nb(b);
-      Teuchos::ParameterList lp;
-      lp.set("Tolerance", tolerance);
-      m.group->applyJacobianInverse(lp, nb, *solution);
-      NOX::SolverStats stats;
-      m.group->logLastLinearSolveStats(stats);
-      const auto& ls = stats.linearSolve;
-      report.linear_iterations += ls.lastLinearSolve_NumIterations;
-      const bool kept = m.lag.kept();
-      m.lag.solved(ls.lastLinearSolve_NumIterations, tolerance, ls.lastLinearSolve_Converged, state.last_f_norm);
-      if (ls.lastLinearSolve_Converged) {
-        // u0 + d - K_ff^-1 (f + K d) = trial - K_ff^-1 (f + K d): the prescribed entries keep trial's
-        // values (the solution is zero in the Dirichlet rows, whose right-hand side is zero).
-        const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(*solution);
-        x.update(1.0, d, 1.0);
-        x.update(-1.0, *Extract::getConstTpetraVector(sol.getThyraRCPVector()), 1.0);
-        const EvaluationTotals e = m.sys.evaluate(x, nullptr, nullptr);
-        if (e.energy_defined() && !(e.energy >= energy_to_beat)) {
-          trial.assign(x);
-          report.status = SolveStatus::Converged;
-        }
-        break;
+    // (A kept preconditioner that fails its budget is updated and the solve repeated: RetryingSolve.)
+    m.group->computeJacobian();
+    state.last_f_norm = rhs.norm2();
+    auto b = Thyra::createVector(Teuchos::rcpFromRef(rhs), xt->space());
+    NOX::Thyra::Vector nb(b);
+    Teuchos::ParameterList lp;
+    lp.set("Tolerance", tolerance);
+    m.group->applyJacobianInverse(lp, nb, *solution);
+    NOX::SolverStats stats;
+    m.group->logLastLinearSolveStats(stats);
+    const auto& ls = stats.linearSolve;
+    report.linear_iterations += ls.lastLinearSolve_NumIterations;
+    m.lag.solved(ls.lastLinearSolve_NumIterations - state.retried_iterations, tolerance, ls.lastLinearSolve_Converged,
+                 state.last_f_norm);
+    if (ls.lastLinearSolve_Converged) {
+      // u0 + d - K_ff^-1 (f + K d) = trial - K_ff^-1 (f + K d): the prescribed entries keep trial's
+      // values (the solution is zero in the Dirichlet rows, whose right-hand side is zero).
+      const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(*solution);
+      x.update(1.0, d, 1.0);
+      x.update(-1.0, *Extract::getConstTpetraVector(sol.getThyraRCPVector()), 1.0);
+      const EvaluationTotals e = m.sys.evaluate(x, nullptr, nullptr);
+      if (e.energy_defined() && !(e.energy >= energy_to_beat)) {
+        trial.assign(x);
+        report.status = SolveStatus::Converged;
       }
-      if (!kept) break;
     }
     if (report.status != SolveStatus::Converged) {
       report.status = SolveStatus::MaxIterations;

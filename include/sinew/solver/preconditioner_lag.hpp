@@ -13,10 +13,11 @@
 //    tolerance changes from solve to solve), times the digits asked now, and at least `min_budget` (a
 //    budget of `factor` alone made the human's kept solves fail at 18 of 18 iterations and cost a redone
 //    iteration each);
-//  - a kept solve over budget, or whose direction does not descend, is redone from the same state with an
-//    updated preconditioner (the line search steps 0), and nothing is kept again in that solve until the
-//    residual is ten times below where the kept one failed (as HessianPolicy's fall-back after a direction
-//    that does not descend);
+//  - a kept solve over budget, or whose direction does not descend, is repeated at once on the same
+//    Jacobian with an updated preconditioner (`retried`, by the solver's RetryingSolve: within the Newton
+//    iteration, which neither assembles again nor counts twice, where the line search used to step 0 and
+//    redo the iteration), and nothing is kept again in that solve until the residual is ten times below
+//    where the kept one failed (as HessianPolicy's fall-back after a direction that does not descend);
 //  - a kept solve within budget but slower than `factor` times the baseline's rate, a step the line
 //    search had to cut, or one that did not halve the residual (the state is where the quadratic model is
 //    poor and the Jacobian changes the most), has the next iteration update. The last matters beyond the
@@ -26,7 +27,7 @@
 //    did not reduce the residual and took 163 Newton iterations and a cut instead of 56).
 // Its inputs are global counts and norms, so every rank makes the same decisions.
 //
-//   Updated --(solve within factor x baseline, full step)--> Kept --(over budget / no descent)--> redo, Updated
+//   Updated --(solve within factor x baseline, full step)--> Kept --(over budget / no descent)--> retried, Updated
 #pragma once
 
 #include <algorithm>
@@ -44,10 +45,7 @@ class PreconditionerLag {
   static double digits(double tolerance) { return std::max(1.0, -std::log10(tolerance)); }
 
   // A new nonlinear solve: failures of the last one are forgotten.
-  void start() {
-    keep_below_ = HUGE_VAL;
-    redo_ = false;
-  }
+  void start() { keep_below_ = HUGE_VAL; }
 
   // Before a Jacobian's linear solver is initialized, at a state of residual `residual`, for a solve to the
   // relative `tolerance`: update the preconditioner (true), or keep it, with CG limited to `budget`?
@@ -69,7 +67,8 @@ class PreconditionerLag {
   }
 
   // After that linear solve: `iterations` CG to `tolerance`, converged or not (over budget), at residual
-  // `residual`.
+  // `residual`. (A kept one that failed has been retried before this is told: a failure here is one
+  // that no update can mend now, and the next Jacobian updates.)
   void solved(int iterations, double tolerance, bool converged, double residual) {
     if (!enabled_) return;
     solved_at_ = residual;
@@ -82,21 +81,23 @@ class PreconditionerLag {
       update_next_ = true;
   }
 
-  // The line search's question before it steps: redo the last direction from the same state (with an
-  // updated preconditioner)? Yes when it came from a kept preconditioner and its solve failed, or it does
-  // not descend (`descends` false).
-  bool redo(bool descends, double residual) {
-    if (kept_ && !descends && !redo_) fail(residual);
-    const bool r = redo_;
-    if (r) ++redos_;
-    redo_ = false;
-    return r;
-  }
-
   // After the line search, with the residual it reached: a step it had to cut, or one that did not halve
   // the residual, has the next iteration update.
   void stepped(double step, double residual) {
     if (step < 1.0 || !(residual < 0.5 * solved_at_)) update_next_ = true;
+  }
+
+  // The kept preconditioner's solve at residual `residual` just failed (over budget, or a direction that
+  // does not descend) and the preconditioner is updated now, for the same Jacobian (`exact`: whether it
+  // is the exact Hessian), and the solve repeated. The repeated solve's `solved` sets the new baseline.
+  void retried(double residual, bool exact) {
+    fail(residual);
+    update_next_ = false;
+    kept_ = false;
+    baseline_ = 0.0;
+    set_up_exact_ = exact;
+    ++updates_;
+    ++retries_;
   }
 
   // A new linear solver (a new Newton group, a new matrix pattern): its first preconditioner is set up
@@ -109,23 +110,22 @@ class PreconditionerLag {
 
   bool kept() const { return kept_; }
   int updates() const { return updates_; }  // preconditioner setups and updates so far
-  int redos() const { return redos_; }      // Newton iterations redone so far
+  int retries() const { return retries_; }  // linear solves repeated in place so far
 
  private:
   void fail(double residual) {
-    redo_ = true;
     update_next_ = true;
     keep_below_ = 0.1 * residual;
   }
 
   bool enabled_;
   double factor_;
-  bool update_next_ = true, kept_ = false, redo_ = false;
+  bool update_next_ = true, kept_ = false;
   bool set_up_exact_ = false;  // whether the last update was for an exact Hessian
   double baseline_ = 0.0;         // CG iterations per digit of the first solve after the last update
   double keep_below_ = HUGE_VAL;  // after a failure: keep again only once the residual is below this
   double solved_at_ = HUGE_VAL;   // the residual at which the last linear solve's Jacobian was taken
-  int updates_ = 0, redos_ = 0;
+  int updates_ = 0, retries_ = 0;
 };
 
 }  // namespace sinew

@@ -47,7 +47,7 @@ struct SolveReport {
   int newton_iterations = 0;
   int linear_iterations = 0;  // CG iterations summed over the Newton iterations
   int preconditioner_updates = 0;  // Newton iterations whose preconditioner was set up or updated
-  int redone_iterations = 0;       // ... redone because a kept preconditioner failed (PreconditionerLag)
+  int retried_solves = 0;          // linear solves repeated with an updated one after a kept one failed (PreconditionerLag)
   int exact_over_budget = 0;       // ... redone projected: the exact Hessian's CG over budget (ExactSolveBudget)
   long long relaxed_nodes = 0;     // nodes moved by the node relaxations kept ('Solver/Node relaxation')
   double initial_residual = 0.0, final_residual = 0.0;
@@ -77,7 +77,7 @@ struct SolveReport {
     newton_iterations += r.newton_iterations;
     linear_iterations += r.linear_iterations;
     preconditioner_updates += r.preconditioner_updates;
-    redone_iterations += r.redone_iterations;
+    retried_solves += r.retried_solves;
     exact_over_budget += r.exact_over_budget;
     relaxed_nodes += r.relaxed_nodes;
     seconds_assembly += r.seconds_assembly;
