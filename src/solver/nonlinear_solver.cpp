@@ -95,10 +95,6 @@ struct SolveState {
   int retried_iterations = 0;
 };
 
-// The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
-// updated (the inner factory's initializeOp) or kept (its initializeAndReuseOp, which Belos implements
-// by keeping the preconditioner object and changing only the operator) within a CG budget, as
-// PreconditionerLag says.
 class LaggedSolveFactory;
 
 // The linear solver of one Jacobian as NOX's group holds it: Belos's, wrapped so that a solve with a kept
@@ -141,11 +137,15 @@ class RetryingSolve : public Thyra::LinearOpWithSolveBase<double> {
   const LaggedSolveFactory& factory_;
 };
 
+// The linear-solver factory NOX's group calls for every Jacobian, with the preconditioner either
+// updated (the inner factory's initializeOp) or kept (its initializeAndReuseOp, which Belos implements
+// by keeping the preconditioner object and changing only the operator) within a CG budget, as
+// PreconditionerLag says. Its solvers are RetryingSolves.
 class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
  public:
   // `state` gives the running solve's state (the lag, the current residual, the tolerance).
   LaggedSolveFactory(Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner,
-                     std::function<const SolveState&()> state)
+                     std::function<SolveState&()> state)
       : inner_(std::move(inner)), state_(std::move(state)) {
     Teuchos::ParameterList& s = solver_list();
     max_iterations_ = s.get("Maximum Iterations", 1000);
@@ -201,7 +201,7 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     op.kept = false;
     trace_memory("preconditioner updated for a retry");
   }
-  SolveState& state() const { return const_cast<SolveState&>(state_()); }
+  SolveState& state() const { return state_(); }
   void setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& p) override { inner_->setParameterList(p); }
   Teuchos::RCP<Teuchos::ParameterList> getNonconstParameterList() override { return inner_->getNonconstParameterList(); }
   Teuchos::RCP<Teuchos::ParameterList> unsetParameterList() override { return inner_->unsetParameterList(); }
@@ -225,7 +225,7 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
   }
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner_;
-  std::function<const SolveState&()> state_;
+  std::function<SolveState&()> state_;
   int max_iterations_ = 1000;
 };
 
@@ -869,7 +869,7 @@ struct NonlinearSolver::Impl {
     try {
       builder.setParameterList(strat);
       lowsf = Teuchos::rcp(new LaggedSolveFactory(builder.createLinearSolveStrategy(""),
-                                                  [this]() -> const SolveState& { return model->state(); }));
+                                                  [this]() -> SolveState& { return model->state(); }));
     } catch (const std::exception& e) {
       throw InputError(std::string("Solver: invalid Stratimikos/Belos/MueLu parameters: ") + e.what());
     }
