@@ -335,8 +335,9 @@ TEST(Solve, ExactHessianFallsBackToProjectionAndConverges) {
 
 TEST(Solve, AnExactSolveOverItsCGBudgetIsRedoneWithProjectionAndTheSolveConverges) {
   // The eager switch of the test above, with every exact solve forced over its CG budget (none):
-  // each is redone from the same state with the projected Hessian, and the solve ends where projection
-  // alone does. Without the redo the truncated exact directions would be stepped along.
+  // each is solved again with the projected Hessian, assembled at the same state within its Newton
+  // iteration (RetryingSolve), and the solve ends where projection alone does. Without that the
+  // truncated exact directions would be stepped along.
   const auto xml = eager_twist_xml;
   const Result projected = run(config(xml("0.0"), "test_results/solve_ob0" + tag()));
   const Result free = run(config(xml("0.999"), "test_results/solve_ob1" + tag()));
@@ -353,7 +354,7 @@ TEST(Solve, AnExactSolveOverItsCGBudgetIsRedoneWithProjectionAndTheSolveConverge
   EXPECT_EQ(projected.records.back().solve.exact_over_budget, 0);
   EXPECT_LT(rel_diff(projected.u, capped.u), 1e-7);
   if (world()->getRank() == 0)
-    std::printf("[ info ] exact solves over budget: %d of %d Newton iterations redone (free: %d Newton)\n", c.exact_over_budget,
+    std::printf("[ info ] exact solves over budget: %d in %d Newton iterations, each solved again projected (free: %d Newton)\n", c.exact_over_budget,
                 c.newton_iterations, free.records.back().solve.newton_iterations);
 }
 

@@ -426,7 +426,7 @@ void Simulation::print_step(const StepRecord& rec) const {
   // Linear solves repeated within their Newton iteration because a kept preconditioner had aged
   // (PreconditionerLag).
   std::string redone = rec.solve.retried_solves > 0 ? ", " + std::to_string(rec.solve.retried_solves) + " CG retried" : "";
-  // Newton iterations redone with projection because the exact Hessian's CG ran over budget (ExactSolveBudget).
+  // Exact solves over their CG budget (ExactSolveBudget), solved again projected within their iteration.
   if (rec.solve.exact_over_budget > 0) redone += ", " + std::to_string(rec.solve.exact_over_budget) + " exact over CG budget";
   // Nodes the relaxation after Newton steps moved ('Solver/Node relaxation').
   const std::string relaxed = rec.solve.relaxed_nodes > 0 ? " (" + std::to_string(rec.solve.relaxed_nodes) + " nodes relaxed)" : "";

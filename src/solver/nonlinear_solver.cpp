@@ -89,7 +89,7 @@ struct SolveState {
   bool* last_step_held = nullptr;
   ExactSolveBudget* exact_budget = nullptr;   // the solver's, kept across solves
   bool last_solve_converged = true;           // whether the last linear solve met its tolerance
-  int exact_over_budget = 0;                  // exact solves over their CG budget, redone projected
+  int exact_over_budget = 0;                  // exact solves over their CG budget, solved again projected
   // CG iterations of a kept preconditioner's failed solve that the last linear solve repeated with an
   // updated one (RetryingSolve): counted in its iterations, not in the new preconditioner's baseline.
   int retried_iterations = 0;
@@ -133,6 +133,11 @@ class RetryingSolve : public Thyra::LinearOpWithSolveBase<double> {
                                        const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c) const override;
 
  private:
+  // One solve, repeated with an updated preconditioner where a kept one failed; `spent` gains the
+  // failed solve's CG.
+  Thyra::SolveStatus<double> solve_kept(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
+                                        const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
+                                        const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c, int& spent) const;
   Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> inner_;
   const LaggedSolveFactory& factory_;
 };
@@ -144,9 +149,10 @@ class RetryingSolve : public Thyra::LinearOpWithSolveBase<double> {
 class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
  public:
   // `state` gives the running solve's state (the lag, the current residual, the tolerance).
+  // `reassemble` assembles the last Jacobian again at its state, as the Hessian policy now says.
   LaggedSolveFactory(Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner,
-                     std::function<SolveState&()> state)
-      : inner_(std::move(inner)), state_(std::move(state)) {
+                     std::function<SolveState&()> state, std::function<void()> reassemble)
+      : inner_(std::move(inner)), state_(std::move(state)), reassemble_(std::move(reassemble)) {
     Teuchos::ParameterList& s = solver_list();
     max_iterations_ = s.get("Maximum Iterations", 1000);
   }
@@ -202,6 +208,12 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
     trace_memory("preconditioner updated for a retry");
   }
   SolveState& state() const { return state_(); }
+  // The exact Hessian's solve failed and the policy fell back: the Jacobian assembled again at the same
+  // state and its solver initialized as for any Jacobian.
+  void reassemble(RetryingSolve& op) const {
+    reassemble_();
+    initializeOp(op.source, &op, op.use);
+  }
   void setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& p) override { inner_->setParameterList(p); }
   Teuchos::RCP<Teuchos::ParameterList> getNonconstParameterList() override { return inner_->getNonconstParameterList(); }
   Teuchos::RCP<Teuchos::ParameterList> unsetParameterList() override { return inner_->unsetParameterList(); }
@@ -226,30 +238,65 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
   }
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> inner_;
   std::function<SolveState&()> state_;
+  std::function<void()> reassemble_;
   int max_iterations_ = 1000;
 };
+
+namespace {
+int iteration_count(const Thyra::SolveStatus<double>& st) {
+  return st.extraParameters.is_null() ? 0 : st.extraParameters->get("Iteration Count", 0);
+}
+bool converged(const Thyra::SolveStatus<double>& st) { return st.solveStatus == Thyra::SOLVE_STATUS_CONVERGED; }
+// NOX solves J x = F for the direction -x: it descends where F . x > 0.
+bool descends(const Thyra::MultiVectorBase<double>& B, const Thyra::MultiVectorBase<double>& X) {
+  return Thyra::scalarProd(*B.col(0), *X.col(0)) > 0.0;
+}
+}  // namespace
+
+Thyra::SolveStatus<double> RetryingSolve::solve_kept(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
+                                                     const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
+                                                     const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c, int& spent) const {
+  Thyra::SolveStatus<double> status = inner_->solve(t, B, X, c);
+  if (!kept || !factory_.state().lag || (converged(status) && descends(B, *X))) return status;
+  spent += iteration_count(status);
+  factory_.update_for_retry(const_cast<RetryingSolve&>(*this));
+  Thyra::assign(X, 0.0);
+  return inner_->solve(t, B, X, c);
+}
 
 Thyra::SolveStatus<double> RetryingSolve::solveImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
                                                     const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
                                                     const Teuchos::Ptr<const Thyra::SolveCriteria<double>> c) const {
   SolveState& s = factory_.state();
   s.retried_iterations = 0;
-  Thyra::SolveStatus<double> status = inner_->solve(t, B, X, c);
-  if (!kept || !s.lag || B.domain()->dim() != 1) return status;
-  // NOX solves J x = F for the direction -x: it descends where F . x > 0.
-  const bool converged = status.solveStatus == Thyra::SOLVE_STATUS_CONVERGED;
-  if (converged && Thyra::scalarProd(*B.col(0), *X->col(0)) > 0.0) return status;
-  auto count = [](const Thyra::SolveStatus<double>& st) {
-    return st.extraParameters.is_null() ? 0 : st.extraParameters->get("Iteration Count", 0);
-  };
-  const int first = count(status);
-  factory_.update_for_retry(const_cast<RetryingSolve&>(*this));
-  Thyra::assign(X, 0.0);
-  status = inner_->solve(t, B, X, c);
-  // Both solves' CG in the iteration's count; the first's noted apart for the new baseline.
-  if (status.extraParameters.is_null()) status.extraParameters = Teuchos::parameterList();
-  status.extraParameters->set("Iteration Count", first + count(status));
-  s.retried_iterations = first;
+  if (B.domain()->dim() != 1) return inner_->solve(t, B, X, c);
+  int spent = 0;  // CG of the solves this one repeated
+  Thyra::SolveStatus<double> status = solve_kept(t, B, X, c, spent);
+  // An exact Hessian's solve over its CG budget (ExactSolveBudget), or whose direction does not descend:
+  // the state is not where that Hessian is positive definite yet. The policy falls back (to the exact
+  // tier from the exact-terms one, or to projection), and the Jacobian is assembled again at the same
+  // state and solved, within the Newton iteration (the line search used to step 0 for it and the next
+  // iteration evaluate the residual there again: 19 of the BVH jump's 612 iterations with inertia).
+  for (int fall = 0; fall < 2 && s.policy.last_exact() && !(converged(status) && descends(B, *X)); ++fall) {
+    if (!converged(status)) {
+      s.policy.exact_solve_over_budget();
+      ++s.exact_over_budget;
+    } else {
+      s.policy.direction_not_descent();
+    }
+    spent += iteration_count(status);
+    factory_.reassemble(const_cast<RetryingSolve&>(*this));
+    Thyra::assign(X, 0.0);
+    status = solve_kept(t, B, X, c, spent);
+  }
+  if (spent > 0) {
+    // Every solve's CG in the iteration's count; those repeated noted apart for the preconditioner's
+    // baseline.
+    const int last = iteration_count(status);
+    if (status.extraParameters.is_null()) status.extraParameters = Teuchos::parameterList();
+    status.extraParameters->set("Iteration Count", spent + last);
+    s.retried_iterations = spent;
+  }
   return status;
 }
 
@@ -339,6 +386,16 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     return sys_.step_limit(*u, *d, t_max);
   }
 
+  // The last Jacobian assembled again at the state it was assembled at, as the policy now says (after
+  // a fall-back from the exact Hessian: RetryingSolve).
+  void reevaluate_jacobian() const {
+    Thyra::ModelEvaluatorBase::InArgs<double> in = createInArgs();
+    in.set_x(jacobian_x_);
+    Thyra::ModelEvaluatorBase::OutArgs<double> out = createOutArgs();
+    out.set_W_op(jacobian_op_);
+    evalModel(in, out);
+  }
+
   double energy(const Thyra::VectorBase<double>& x) const {
     const auto t0 = Clock::now();
     const double e = sys_.evaluate(*Extract::getConstTpetraVector(Teuchos::rcpFromRef(x)), nullptr, nullptr).energy;
@@ -356,8 +413,11 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     Teuchos::RCP<Vector> f;
     Teuchos::RCP<CrsMatrix> W;
     if (Teuchos::nonnull(out.get_f())) f = Extract::getTpetraVector(out.get_f());
-    if (Teuchos::nonnull(out.get_W_op()))
+    if (Teuchos::nonnull(out.get_W_op())) {
       W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
+      if (in.get_x().get() != jacobian_x_.get()) jacobian_x_ = in.get_x()->clone_v();
+      jacobian_op_ = out.get_W_op();
+    }
     SolveState& s = *state_;
     // Fault injection for the tests of error agreement across ranks: a Jacobian that throws on one rank
     // ("all": on every rank), as a bad_alloc or a preconditioner's exception would.
@@ -379,6 +439,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   System& sys_;
   SolveState* state_ = nullptr;
+  // Where the last Jacobian was assembled, and into what (reevaluate_jacobian).
+  mutable Teuchos::RCP<const Thyra::VectorBase<double>> jacobian_x_;
+  mutable Teuchos::RCP<Thyra::LinearOpBase<double>> jacobian_op_;
   double energy_scale_ = 0.0, points_ = 1.0;  // quadrature points of the whole mesh
   bool fault_ = false;
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_;
@@ -458,7 +521,8 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       return redo;
     };
     // An exact solve over its CG budget (ExactSolveBudget): the state is not where the exact Hessian is
-    // positive definite yet; redo the iteration with the projected one.
+    // positive definite yet; redo the iteration with the projected one. (RetryingSolve falls back within
+    // the iteration, twice at most: this and the exact branch below are the net behind it.)
     if (state.policy.last_exact() && !state.last_solve_converged) {
       state.policy.exact_solve_over_budget();
       ++state.exact_over_budget;
@@ -869,7 +933,8 @@ struct NonlinearSolver::Impl {
     try {
       builder.setParameterList(strat);
       lowsf = Teuchos::rcp(new LaggedSolveFactory(builder.createLinearSolveStrategy(""),
-                                                  [this]() -> SolveState& { return model->state(); }));
+                                                  [this]() -> SolveState& { return model->state(); },
+                                                  [this]() { model->reevaluate_jacobian(); }));
     } catch (const std::exception& e) {
       throw InputError(std::string("Solver: invalid Stratimikos/Belos/MueLu parameters: ") + e.what());
     }

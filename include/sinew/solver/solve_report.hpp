@@ -48,7 +48,7 @@ struct SolveReport {
   int linear_iterations = 0;  // CG iterations summed over the Newton iterations
   int preconditioner_updates = 0;  // Newton iterations whose preconditioner was set up or updated
   int retried_solves = 0;          // linear solves repeated with an updated one after a kept one failed (PreconditionerLag)
-  int exact_over_budget = 0;       // ... redone projected: the exact Hessian's CG over budget (ExactSolveBudget)
+  int exact_over_budget = 0;       // exact solves over their CG budget (ExactSolveBudget), solved again projected
   long long relaxed_nodes = 0;     // nodes moved by the node relaxations kept ('Solver/Node relaxation')
   double initial_residual = 0.0, final_residual = 0.0;
   double seconds_assembly = 0.0, seconds_preconditioner = 0.0, seconds_linear = 0.0, seconds_line_search = 0.0,
