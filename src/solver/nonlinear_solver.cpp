@@ -90,18 +90,20 @@ struct SolveState {
   ExactSolveBudget* exact_budget = nullptr;   // the solver's, kept across solves
   bool last_solve_converged = true;           // whether the last linear solve met its tolerance
   int exact_over_budget = 0;                  // exact solves over their CG budget, solved again projected
-  // CG iterations of a kept preconditioner's failed solve that the last linear solve repeated with an
-  // updated one (RetryingSolve): counted in its iterations, not in the new preconditioner's baseline.
+  // CG iterations of the failed solves that the last linear solve repeated (RetryingSolve: a kept
+  // preconditioner's, an exact Hessian's): counted in its iterations, not in the baseline of the
+  // preconditioner it ended with.
   int retried_iterations = 0;
 };
 
 class LaggedSolveFactory;
 
-// The linear solver of one Jacobian as NOX's group holds it: Belos's, wrapped so that a solve with a kept
-// preconditioner that fails (over its CG budget, or a direction that does not descend) is repeated at
-// once with the preconditioner updated for the same matrix. Redone by the line search instead, as it
-// was, such a failure cost an evaluation at the old state, an assembly and a Newton iteration: 42 of
-// BCN_Epileptic's 874 with inertia, 20 of the BVH jump's 612.
+// The linear solver of one Jacobian as NOX's group holds it: Belos's, wrapped so that a failed solve
+// (over its CG budget, or a direction that does not descend) is repeated within the Newton iteration:
+// a kept preconditioner's with the preconditioner updated for the same matrix, an exact Hessian's with
+// the Jacobian assembled again at the same state after the policy's fall-back. Redone by the line
+// search instead, as they were, such failures cost an evaluation at the old state, an assembly and a
+// Newton iteration each: 42 + 7 of BCN_Epileptic's 874 with inertia, 20 + 10 of the BVH jump's 612.
 class RetryingSolve : public Thyra::LinearOpWithSolveBase<double> {
  public:
   RetryingSolve(Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> inner, const LaggedSolveFactory& factory)
@@ -231,7 +233,7 @@ class LaggedSolveFactory : public Thyra::LinearOpWithSolveFactoryBase<double> {
   void set_budget(const SolveState& s, int budget) const {
     if (s.exact_budget && s.policy.last_exact()) {
       budget = std::min(budget, s.exact_budget->budget(s.linear_tolerance(), max_iterations_));
-      // Fault injection for the tests of the redo path: a budget no exact solve meets.
+      // Fault injection for the tests of the exact fall-back: a budget no exact solve meets.
       if (const char* forced = std::getenv("SINEW_EXACT_CG_BUDGET")) budget = std::atoi(forced);
     }
     solver_list().set("Maximum Iterations", std::min(budget, max_iterations_));
@@ -276,7 +278,8 @@ Thyra::SolveStatus<double> RetryingSolve::solveImpl(const Thyra::EOpTransp t, co
   // the state is not where that Hessian is positive definite yet. The policy falls back (to the exact
   // tier from the exact-terms one, or to projection), and the Jacobian is assembled again at the same
   // state and solved, within the Newton iteration (the line search used to step 0 for it and the next
-  // iteration evaluate the residual there again: 19 of the BVH jump's 612 iterations with inertia).
+  // iteration evaluate the residual there again: 10 of the BVH jump's 612 iterations with inertia and
+  // 7 of BCN's 874, all directions that did not descend).
   for (int fall = 0; fall < 2 && s.policy.last_exact() && !(converged(status) && descends(B, *X)); ++fall) {
     if (!converged(status)) {
       s.policy.exact_solve_over_budget();
@@ -415,7 +418,9 @@ class ElasticModel : public Thyra::StateFuncModelEvaluatorBase<double> {
     if (Teuchos::nonnull(out.get_f())) f = Extract::getTpetraVector(out.get_f());
     if (Teuchos::nonnull(out.get_W_op())) {
       W = Teuchos::rcp_dynamic_cast<CrsMatrix>(Extract::getTpetraOperator(out.get_W_op()), true);
-      if (in.get_x().get() != jacobian_x_.get()) jacobian_x_ = in.get_x()->clone_v();
+      // (NOX's group passes its own x, which stays put until the solve that follows has ended, and
+      // reevaluate_jacobian runs within that solve: no copy is needed.)
+      jacobian_x_ = in.get_x();
       jacobian_op_ = out.get_W_op();
     }
     SolveState& s = *state_;
@@ -488,10 +493,11 @@ class EnergyMerit : public NOX::MeritFunction::Generic {
 // energy test would reject every step: there a step is accepted when the energy is unchanged to
 // round-off and the residual norm decreased.
 //
-// A direction that does not descend (slope >= 0) is never stepped along. From the exact Hessian it
-// means the state is not in the quadratic region yet: the policy falls back to projection and the
-// iteration is redone from the same state (step 0); from the projected Hessian it is a failure. (A kept
-// preconditioner's direction that does not descend never gets here: RetryingSolve repeats its solve.)
+// A direction that does not descend (slope >= 0) is never stepped along. From the projected Hessian it
+// is a failure. From the exact Hessian it means the state is not in the quadratic region yet, and
+// RetryingSolve has already fallen back and solved again within the iteration (as for a kept
+// preconditioner's failed solve); should one still arrive here, the policy falls back and the iteration
+// is redone from the same state (step 0).
 class EnergyBacktrack : public NOX::LineSearch::Generic {
  public:
   EnergyBacktrack(const ElasticModel& model, Teuchos::ParameterList& bt, double max_step, double relax_share)
