@@ -1178,6 +1178,23 @@ TEST(BarrierContact, EveryStepStartsFromTheLinearisedStepAndEndsWhereExtrapolati
 // The blocks pressed 0.3 into each other's place with the barrier and its edge pairs: the run ends with
 // no surface point inside the other block and no pair (point-face or edge-edge) closer than a hundredth
 // of its dhat, the top's push carried to the bottom.
+// The barrier's default k is a tenth of the springs' ((mu_L + lambda_L) / h against ten times that: at the
+// springs' k the barrier's energy rose so steeply within its thickness that Newton steps closing surfaces
+// were cut to a few percent, docs/performance.md "A softer barrier"); a given 'Stiffness' is both's.
+TEST(BarrierContact, DefaultsToATenthOfTheSpringsStiffnessAndTakesAGivenOneAsIs) {
+  for (const std::string given : {"", R"x(<Parameter name="Stiffness" type="double" value="3.0e5"/>)x"}) {
+    SCOPED_TRACE(given.empty() ? "default" : "given");
+    Simulation sim(config(blocks_xml(0.0, true, 1, R"x(<Parameter name="Self contact model" type="string" value="barrier"/>)x" + given),
+                          "test_results/contact_blocks_barrier_stiffness" + tag()),
+                   RunOptions{true, ""});
+    const ContactTerm& contact = *sim.scene().contact();
+    const System& sys = sim.scene().system();
+    const double springs = given.empty() ? 10.0 * sys.stiffness_scale() / sys.cell_size() : 3.0e5;
+    EXPECT_NEAR(contact.settings().stiffness, springs, 1e-12 * springs);
+    EXPECT_NEAR(contact.barrier_stiffness(), given.empty() ? springs / 10.0 : springs, 1e-12 * springs);
+  }
+}
+
 TEST(BarrierContact, TwoBlocksPressedTogetherNeverTouch) {
   Simulation sim(config(blocks_xml(0.4, true, 4,
                                    R"x(<Parameter name="Self contact model" type="string" value="barrier"/>

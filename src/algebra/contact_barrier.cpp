@@ -207,7 +207,7 @@ void ContactTerm::add_barrier(const TermInput& in, TermOutput& out, double& ener
       energy = HUGE_VAL;
       continue;
     }
-    const double Dhat = dhat * dhat, kappa = settings_.stiffness * p.area / Dhat;
+    const double Dhat = dhat * dhat, kappa = barrier_stiffness() * p.area / Dhat;
     // g: the pair's energy per kappa, its gradient and (wanted or not) Hessian in the twelve coordinates.
     barrier::Distance2 g;
     if (p.edges) {

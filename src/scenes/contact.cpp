@@ -60,6 +60,10 @@ std::shared_ptr<ContactTerm> make_contact_term(const ContactParameters& p, const
   cs.self = p.self;
   cs.stiffness = p.stiffness > 0.0 ? p.stiffness : 10.0 * system.stiffness_scale() / h;
   cs.barrier = p.model == ContactParameters::Model::Barrier;
+  // The barrier a tenth as stiff as the springs: its kappa b(d^2) grows without bound as surfaces close
+  // anyway, and at 10 (mu_L + lambda_L) / h its energy rose so steeply within dhat that Newton steps
+  // closing surfaces were cut to a few percent (docs/performance.md, "A softer barrier").
+  if (p.stiffness == 0.0) cs.barrier_stiffness = system.stiffness_scale() / h;
   // The barrier's self contact starts three times farther out than the springs push: at 0.05 h, with
   // edge pairs, the crease behind BCN_Epileptic's knee closed on a cell until a point inverted; at 0.15 h
   // the crease's pairs engage sooner and share the load (docs/performance.md, "A thicker barrier").

@@ -82,7 +82,8 @@ struct ContactParameters {
   void visit(V& v) {
     v.entry("Self contact", self, false, "the body's surface pushes back where it meets itself (Sec. 6)");
     v.entry("Stiffness", stiffness, 0.0,
-            "penalty stiffness k: traction per unit of penetration (0: 10 (mu_L + lambda_L) / h, h the mean edge length)",
+            "penalty stiffness k: traction per unit of penetration (0: 10 (mu_L + lambda_L) / h, h the mean edge length; "
+            "the barrier's self contact, whose kappa is k A / thickness^2, (mu_L + lambda_L) / h)",
             Range::non_negative());
     v.entry("Thickness", thickness, 0.0,
             "the gap below which the springs push, or where the barrier starts (0: 0.05 h, with the barrier's self "

@@ -115,6 +115,8 @@ struct ContactSettings {
   // `margin` (contact_barrier.hpp) instead of penalty springs: `thickness` is where the barrier starts
   // (dhat), and every Newton step is cut short of any vertex passing through a triangle (step_limit).
   bool barrier = false;
+  // The barrier's k (kappa = k A / dhat^2), where it differs from the springs' (0: `stiffness`).
+  double barrier_stiffness = 0.0;
   // With the barrier, edge-edge pairs beside the vertex-triangle ones, in the energy and in the step
   // limit: without them two edges can pass through each other with no vertex crossing a face (the
   // scene's default is on: docs/performance.md, "Surfaces through themselves"; off here, as a bare
@@ -212,6 +214,7 @@ class ContactTerm final : public EnergyTerm {
   std::size_t colliders() const { return colliders_.size(); }
   const SurfaceMesh& surface() const { return surface_; }
   const ContactSettings& settings() const { return settings_; }
+  double barrier_stiffness() const { return settings_.barrier_stiffness > 0.0 ? settings_.barrier_stiffness : settings_.stiffness; }
   // Per owned node, the contact pressure (the springs' and colliders' traction on it, summed) of the
   // last evaluation: zero off contact.
   const std::vector<double>& pressure() const { return pressure_; }
