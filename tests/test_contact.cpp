@@ -1175,9 +1175,6 @@ TEST(BarrierContact, EveryStepStartsFromTheLinearisedStepAndEndsWhereExtrapolati
   if (world()->getRank() == 0) std::printf("  Newton iterations: %d from the tangent, %d extrapolated\n", tn, en);
 }
 
-// The blocks pressed 0.3 into each other's place with the barrier and its edge pairs: the run ends with
-// no surface point inside the other block and no pair (point-face or edge-edge) closer than a hundredth
-// of its dhat, the top's push carried to the bottom.
 // The barrier's default k is a tenth of the springs' ((mu_L + lambda_L) / h against ten times that: at the
 // springs' k the barrier's energy rose so steeply within its thickness that Newton steps closing surfaces
 // were cut to a few percent, docs/performance.md "A softer barrier"); a given 'Stiffness' is both's.
@@ -1195,6 +1192,9 @@ TEST(BarrierContact, DefaultsToATenthOfTheSpringsStiffnessAndTakesAGivenOneAsIs)
   }
 }
 
+// The blocks pressed 0.3 into each other's place with the barrier and its edge pairs: the run ends with
+// no surface point inside the other block and no pair (point-face or edge-edge) closer than a hundredth
+// of its dhat, the top's push carried to the bottom.
 TEST(BarrierContact, TwoBlocksPressedTogetherNeverTouch) {
   Simulation sim(config(blocks_xml(0.4, true, 4,
                                    R"x(<Parameter name="Self contact model" type="string" value="barrier"/>
