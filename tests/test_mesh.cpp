@@ -2,11 +2,13 @@
 // orientation is repaired and counted; the distribution gives every node and element one owner and
 // every rank the ghosts it needs; an affine patch test on a Gmsh mesh is exact for every model; a
 // twist on a Gmsh mesh is the same on 1 thread, 2 threads and 2 ranks; bone transforms compose
-// parents and interpolate keyframes and motion files as documented; bones move their nodes exactly.
+// parents and interpolate keyframes and motion files as documented; bones move their nodes exactly;
+// a box tree refitted to moved boxes answers its queries as one built afresh.
 #include "scene_test_utils.hpp"
 #include "tpetra_test_utils.hpp"
 
 #include <sinew/core/xml_input.hpp>
+#include <sinew/discretization/aabb_tree.hpp>
 #include <sinew/discretization/boundary.hpp>
 #include <sinew/discretization/mesh_file.hpp>
 #include <sinew/discretization/triangle_surface.hpp>
@@ -546,6 +548,58 @@ double check_closed(const Obj& o, const std::string& what) {
 }
 
 }  // namespace
+
+// The collision test refits its swept-box trees between rebuilds (contact_barrier.cpp): a tree refitted
+// to boxes that moved far (the split no longer follows them) must find exactly what a brute-force search
+// and a tree built afresh find.
+TEST(BoxTree, ARefittedTreeAnswersAsOneBuiltAfresh) {
+  auto unit = [](std::uint64_t k) { return static_cast<double>((k * 0x9E3779B97F4A7C15ull) >> 11) / 9007199254740992.0; };
+  auto boxes_at = [&](int n, std::uint64_t seed, double spread) {
+    std::vector<geom::Box> boxes(n);
+    for (int i = 0; i < n; ++i) {
+      const std::uint64_t k = seed * 1000003ull + 7ull * static_cast<std::uint64_t>(i);
+      const geom::Vec c{spread * unit(k + 1), spread * unit(k + 2), spread * unit(k + 3)};
+      boxes[i].add(c);
+      boxes[i].add(geom::Vec{c[0] + 0.05 * unit(k + 4), c[1] + 0.05 * unit(k + 5), c[2] + 0.05 * unit(k + 6)});
+    }
+    return boxes;
+  };
+  const int n = 500;
+  geom::AabbTree tree(boxes_at(n, 1, 1.0));
+  for (std::uint64_t round = 2; round < 5; ++round) {
+    const auto moved = boxes_at(n, round, 1.0 + round);  // every box elsewhere, the cloud larger
+    tree.refit(moved);
+    const geom::AabbTree fresh(moved);
+    ASSERT_EQ(tree.items(), moved.size());
+    for (int q = 0; q < 40; ++q) {
+      const std::uint64_t k = 77ull * round + static_cast<std::uint64_t>(q);
+      const geom::Vec p{(1.0 + round) * unit(k + 11), (1.0 + round) * unit(k + 12), (1.0 + round) * unit(k + 13)};
+      const double r = 0.3 * unit(k + 14);
+      std::vector<int> brute, refitted, built;
+      for (int i = 0; i < n; ++i)
+        if (moved[i].distance2(p) <= r * r) brute.push_back(i);
+      tree.near(p, r, [&](int i) { refitted.push_back(i); });
+      fresh.near(p, r, [&](int i) { built.push_back(i); });
+      std::sort(refitted.begin(), refitted.end());
+      std::sort(built.begin(), built.end());
+      EXPECT_EQ(refitted, brute);
+      EXPECT_EQ(built, brute);
+      double a = 0.0, b = 0.0;
+      auto d2 = [&](int i) { return moved[i].distance2(p); };
+      const int ia = tree.closest(p, HUGE_VAL, d2, a), ib = fresh.closest(p, HUGE_VAL, d2, b);
+      ASSERT_GE(ia, 0);
+      ASSERT_GE(ib, 0);
+      EXPECT_EQ(a, b);  // (a tie between boxes holding p may name either)
+      EXPECT_EQ(d2(ia), a);
+    }
+    // Every node's box holds its items' boxes.
+    for (int id = 0; id < tree.node_count(); ++id)
+      for (int k = tree.node_begin(id); k < tree.node_end(id); ++k) {
+        const geom::Box& in = moved[tree.item(k)];
+        EXPECT_TRUE(tree.node_box(id).contains(in.lo) && tree.node_box(id).contains(in.hi));
+      }
+  }
+}
 
 TEST(Surface, BoundarySurfacesAreClosedOutwardAndCountedOnAnyNumberOfRanks) {
   const std::string twist = R"x(

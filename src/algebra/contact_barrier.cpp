@@ -17,8 +17,7 @@ using namespace geom;
 namespace {
 // Calls fn(e, f) for every pair of edges e < f (e among `mine`) whose boxes, e's grown by `grow`, meet.
 template <class Fn>
-void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes, double grow, Fn&& fn) {
-  const AabbTree tree(boxes);
+void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes, const AabbTree& tree, double grow, Fn&& fn) {
   for (int e : mine) {
     Box b = boxes[e];
     b.inflate(grow);
@@ -27,6 +26,20 @@ void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes,
                    if (f > e && boxes[f].overlaps(b)) fn(e, f);
                  });
   }
+}
+template <class Fn>
+void edge_box_pairs(const std::vector<int>& mine, const std::vector<Box>& boxes, double grow, Fn&& fn) {
+  edge_box_pairs(mine, boxes, AabbTree(boxes), grow, std::forward<Fn>(fn));
+}
+
+// The collision test's trees of swept boxes: refitted (O(n)) for each new direction, and built afresh
+// (O(n log n)) every `swept_rebuild` tests, so that the split follows the surface as it moves.
+constexpr int swept_rebuild = 8;
+void fit(AabbTree& tree, const std::vector<Box>& boxes, bool rebuild) {
+  if (rebuild || tree.items() != boxes.size() || tree.empty())
+    tree.build(boxes);
+  else
+    tree.refit(boxes);
 }
 }  // namespace
 
@@ -253,7 +266,7 @@ namespace {
 // bounds below 1, skipping samples (t = -1) and pairs `skips` names.
 template <class Skips, class Fn>
 void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const std::vector<Vec>& x0, const std::vector<Vec>& x1,
-                   Skips&& skips, Fn&& fn) {
+                   AabbTree& tree, bool rebuild, Skips&& skips, Fn&& fn) {
   const auto& T = s.triangles;
   std::vector<Box> swept(T.size());
   for (std::size_t t = 0; t < T.size(); ++t)
@@ -261,7 +274,7 @@ void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const 
       swept[t].add(x0[m]);
       swept[t].add(x1[m]);
     }
-  const AabbTree tree(swept);
+  fit(tree, swept, rebuild);
   for (int v : samples) {
     if (skips(-1, v)) continue;
     Box b;
@@ -282,14 +295,15 @@ void limited_pairs(const SurfaceMesh& s, const std::vector<int>& samples, const 
 // The same for edge pairs (e among `mine`, e < f): fn(e, f, fraction).
 template <class Skips, class Fn>
 void limited_edge_pairs(const std::vector<std::array<int, 2>>& edges, const std::vector<int>& mine, const std::vector<Vec>& x0,
-                        const std::vector<Vec>& x1, Skips&& skips, Fn&& fn) {
+                        const std::vector<Vec>& x1, AabbTree& tree, bool rebuild, Skips&& skips, Fn&& fn) {
   std::vector<Box> swept(edges.size());
   for (std::size_t e = 0; e < edges.size(); ++e)
     for (int m : edges[e]) {
       swept[e].add(x0[m]);
       swept[e].add(x1[m]);
     }
-  edge_box_pairs(mine, swept, 0.0, [&](int e, int f) {
+  fit(tree, swept, rebuild);
+  edge_box_pairs(mine, swept, tree, 0.0, [&](int e, int f) {
     if (skips(e, f)) return;
     const auto &E = edges[e], &F = edges[f];
     const double t = barrier::edge_edge_toi(x0[E[0]], x0[E[1]], x0[F[0]], x0[F[1]], x1[E[0]] - x0[E[0]], x1[E[1]] - x0[E[1]],
@@ -313,14 +327,15 @@ void ContactTerm::admit_guess(const Vector& u, Vector& guess) const {
   gather_surface(at0);
   gather_surface(at1);
   std::vector<double> fraction(surface_.vertices(), 1.0);
-  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
+  const bool rebuild = swept_tests_++ % swept_rebuild == 0;
+  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface, swept_triangles_, rebuild,
                 [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int v, int t, double f) {
                   fraction[v] = std::min(fraction[v], 0.9 * f);
                   for (int m : surface_.triangles[t]) fraction[m] = std::min(fraction[m], 0.9 * f);
                 });
   if (edge_pairs())
-    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, swept_edges_, rebuild, [&](int e, int f) { return edge_skips(e, f); },
                        [&](int e, int f, double t) {
                          for (int m : edges_[e]) fraction[m] = std::min(fraction[m], 0.9 * t);
                          for (int m : edges_[f]) fraction[m] = std::min(fraction[m], 0.9 * t);
@@ -352,11 +367,12 @@ double ContactTerm::step_limit(const Vector& u, const Vector& du, double t_max) 
   Positions at1(system_, *end);
   gather_surface(at1);
   double limit = 1.0;
-  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface,
+  const bool rebuild = swept_tests_++ % swept_rebuild == 0;
+  limited_pairs(surface_, sample_vertex_, at0.surface, at1.surface, swept_triangles_, rebuild,
                 [&](int t, int v) { return ccd_skips(t, v); },
                 [&](int, int, double f) { limit = std::min(limit, f); });
   if (edge_pairs())
-    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, [&](int e, int f) { return edge_skips(e, f); },
+    limited_edge_pairs(edges_, owned_edges_, at0.surface, at1.surface, swept_edges_, rebuild, [&](int e, int f) { return edge_skips(e, f); },
                        [&](int, int, double t) { limit = std::min(limit, t); });
   double global = limit;
   MPI_Allreduce(&limit, &global, 1, MPI_DOUBLE, MPI_MIN, raw_comm(*system_.comm()));

@@ -3,7 +3,8 @@
 // element holds a surface sample), the items within a distance of a point (surface triangles near a
 // sample), and branch-and-bound nearest item (the closest surface point, the distance to a collider).
 // A fourth, descend, lets a caller treat a whole subtree in bulk (the far field of a fast winding number).
-// Host only; built in O(n log n), rebuilt when positions change.
+// Host only; built in O(n log n), rebuilt when positions change, or refitted in O(n) (the same split of
+// the items, each node's box recomputed) when they change a little.
 #pragma once
 
 #include <sinew/discretization/geometry.hpp>
@@ -29,6 +30,26 @@ class AabbTree {
     split(0, static_cast<int>(boxes.size()), boxes);
   }
   bool empty() const { return nodes_.empty(); }
+  std::size_t items() const { return boxes_.size(); }
+
+  // New boxes for the same items (boxes.size() == items()): the nodes keep their items and take the
+  // union of the new boxes. Every query stays exact; only its speed depends on how far the items moved
+  // since the last build (the split no longer follows them).
+  void refit(const std::vector<Box>& boxes) {
+    boxes_ = boxes;
+    // Parents come before their children (split is preorder): children are refitted first.
+    for (int i = static_cast<int>(nodes_.size()) - 1; i >= 0; --i) {
+      Node& n = nodes_[i];
+      Box box;
+      if (n.left < 0) {
+        for (int k = n.begin; k < n.end; ++k) box.add(boxes_[items_[k]]);
+      } else {
+        box.add(nodes_[n.left].box);
+        box.add(nodes_[n.right].box);
+      }
+      n.box = box;
+    }
+  }
 
   // The nodes, parents before children; node i holds the items item(begin)..item(end - 1) of its range.
   int node_count() const { return static_cast<int>(nodes_.size()); }

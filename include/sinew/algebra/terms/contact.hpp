@@ -337,6 +337,9 @@ class ContactTerm final : public EnergyTerm {
   mutable std::vector<double> pressure_;
   mutable std::vector<char> tied_;  // per surface vertex: tied by an attachment (empty: none is)
   mutable bool tied_known_ = false;  // tied_ read from the system (at the first detection)
+  // The collision test's trees of swept triangles and edges, kept between tests (contact_barrier.cpp, fit).
+  mutable geom::AabbTree swept_triangles_, swept_edges_;
+  mutable long long swept_tests_ = 0;
   std::vector<double> clearance_;
   long long prescribed_samples_ = -1;  // the barrier's: surface points with a prescribed DOF (-1: not counted yet)
   bool prescribed_reported_ = false;
