@@ -489,6 +489,84 @@ TEST(Skeleton, ChildrenMoveWithTheirParentsAndKeyframesInterpolate) {
   EXPECT_LT(err, 1e-14);
 }
 
+TEST(Skeleton, ADynamicStepsGuessAddsTheSkinnedAccelerationOfTheBones) {
+  // Two bones that translate at one speed up to load 0.5 and at another after it. The inertial
+  // predictor u_n + h v_n carries the flesh on at the old speed; a flesh that moved with its skin must
+  // start the step at the skin's new place: the predictor plus the skinned second difference
+  // (Scene::predict_acceleration), exact for translations whatever the blend of weights.
+  const std::string skeleton = R"x(
+  <ParameterList name="Skeleton">
+    <ParameterList name="Bones">
+      <ParameterList name="bottom"><Parameter name="Region" type="string" value="group bottom"/>
+        <ParameterList name="Keyframes">
+          <ParameterList name="a"><Parameter name="Time" type="double" value="0.5"/>
+            <Parameter name="Translation" type="Array(double)" value="{0, 0, 0.1}"/></ParameterList>
+          <ParameterList name="b"><Parameter name="Time" type="double" value="1.0"/>
+            <Parameter name="Translation" type="Array(double)" value="{0, 0.1, 0.3}"/></ParameterList>
+        </ParameterList>
+      </ParameterList>
+      <ParameterList name="top"><Parameter name="Region" type="string" value="group top"/>
+        <ParameterList name="Keyframes">
+          <ParameterList name="a"><Parameter name="Time" type="double" value="0.5"/>
+            <Parameter name="Translation" type="Array(double)" value="{0.1, 0, 0}"/></ParameterList>
+          <ParameterList name="b"><Parameter name="Time" type="double" value="1.0"/>
+            <Parameter name="Translation" type="Array(double)" value="{0.4, 0, 0.05}"/></ParameterList>
+        </ParameterList>
+      </ParameterList>
+    </ParameterList>
+  </ParameterList>)x";
+  Simulation sim(config(box_scene("box_v41.msh", "stable-neohookean", 0.3, "", skeleton, 4), "test_results/skin_acceleration" + tag()),
+                 RunOptions{true, ""});
+  Scene& scene = sim.scene();
+  const System& sys = scene.system();
+  const Skeleton& s = scene.skeleton();
+  const std::vector<char> fixed = sys.fixed_owned_mask();
+  const std::size_t owned = sys.mesh().n_owned_nodes;
+  // Where the skin puts an owned node at load t: the blend of its bones' translations.
+  auto skinned = [&](std::size_t n, double t) {
+    std::array<double, 3> d{0.0, 0.0, 0.0};
+    for (const auto& [b, w] : s.weights(n))
+      for (int i = 0; i < 3; ++i) d[i] += w * s.transform(b, t).t[i];
+    return d;
+  };
+  auto check = [&](double t0, double t1, double scale) {
+    const double tp = t0 - (t1 - t0);
+    auto u = sys.create_vector(), guess = sys.create_vector();
+    double err = 0.0, acceleration = 0.0;
+    std::size_t checked = 0;
+    {
+      auto a = u->getLocalViewHost(Tpetra::Access::OverwriteAll);
+      auto g = guess->getLocalViewHost(Tpetra::Access::OverwriteAll);
+      for (std::size_t n = 0; n < owned; ++n) {
+        const auto d0 = skinned(n, t0), dp = skinned(n, tp);
+        for (int i = 0; i < 3; ++i) {
+          a(3 * n + i, 0) = d0[i];
+          g(3 * n + i, 0) = d0[i] + scale * (d0[i] - dp[i]);  // u_n + reach v_n, v_n = (u_n - u_n-1) / h
+        }
+      }
+    }
+    scene.predict_acceleration(t0, t1, *u, *guess, scale);
+    auto g = guess->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t n = 0; n < owned; ++n) {
+      if (fixed[3 * n] || s.weights(n).empty()) continue;
+      ++checked;
+      const auto d0 = skinned(n, t0), d1 = skinned(n, t1), dp = skinned(n, tp);
+      for (int i = 0; i < 3; ++i) {
+        err = std::max(err, std::fabs(g(3 * n + i, 0) - (d0[i] + scale * (d1[i] - d0[i]))));
+        acceleration = std::max(acceleration, std::fabs(d1[i] - 2.0 * d0[i] + dp[i]));
+      }
+    }
+    EXPECT_GT(checked, 0u);
+    EXPECT_LT(err, 1e-14) << "t0 " << t0 << ", scale " << scale;
+    return acceleration;
+  };
+  // Across the change of speed (backward Euler's u_n+1, then the midpoint's y: half way).
+  EXPECT_GT(check(0.5, 0.625, 1.0), 0.01);  // what the inertial predictor alone would miss
+  EXPECT_GT(check(0.5, 0.625, 0.5), 0.01);
+  // At one speed there is nothing to add.
+  EXPECT_LT(check(0.75, 0.875, 1.0), 1e-15);
+}
+
 TEST(Skeleton, AMotionFileIsInterpolatedBetweenItsFrames) {
   // Three frames of world transforms; frame f is reached at load f / 2.
   const Rigid f1 = about({0, 0, 1}, 0.3, {0.5, 0.5, 1}, {0.1, 0, 0}), f2 = about({0.6, 0.8, 0}, 0.5, {0.5, 0.5, 1}, {0.2, 0, 0.1});

@@ -1,6 +1,8 @@
 // ExternalForceTerm (terms/external_force.hpp).
 #include <sinew/algebra/terms/external_force.hpp>
 
+#include <Tpetra_Vector.hpp>
+
 namespace sinew {
 
 namespace {
@@ -14,7 +16,10 @@ Kokkos::View<double*, DeviceMemory> device_copy(const std::vector<double>& v, co
 }  // namespace
 
 ExternalForceTerm::ExternalForceTerm(const std::vector<double>& nodal_volume, const std::vector<double>& nodal_mass)
-    : volume_(device_copy(nodal_volume, "nodal volume")), mass_(device_copy(nodal_mass, "nodal mass")) {}
+    : volume_(device_copy(nodal_volume, "nodal volume")),
+      mass_(device_copy(nodal_mass, "nodal mass")),
+      host_volume_(nodal_volume),
+      host_mass_(nodal_mass) {}
 
 bool ExternalForceTerm::active() const {
   for (int i = 0; i < 3; ++i)
@@ -41,6 +46,16 @@ void ExternalForceTerm::add(const TermInput& in, TermOutput& out) const {
       },
       energy);
   out.energy += energy;
+}
+
+bool ExternalForceTerm::add_load_acceleration(Vector& a) const {
+  if (!active()) return false;
+  auto h = a.getLocalViewHost(Tpetra::Access::ReadWrite);
+  for (std::size_t n = 0; n < host_mass_.size(); ++n) {
+    if (!(host_mass_[n] > 0.0)) continue;
+    for (int c = 0; c < 3; ++c) h(3 * n + c, 0) += gravity_[c] + host_volume_[n] * body_[c] / host_mass_[n];
+  }
+  return true;
 }
 
 void ExternalForceTerm::set_full(const std::array<double, 3>& b, const std::array<double, 3>& g, bool ramped) {

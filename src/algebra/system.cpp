@@ -313,6 +313,13 @@ double System::admit_guess(const Vector& u, Vector& guess) const {
   return taken;
 }
 
+bool System::load_acceleration(Vector& a) const {
+  a.putScalar(0.0);
+  bool any = false;
+  for (const auto& term : terms_) any = term->add_load_acceleration(a) || any;
+  return any;
+}
+
 std::vector<std::string> System::log_columns() const {
   std::vector<std::string> c;
   for (const auto& term : terms_) {

@@ -15,6 +15,8 @@ Dynamics::Dynamics(Scene& scene) : scene_(scene), p_(scene.time()), end_time_(sc
   v_ = sys.create_vector();
   predictor_ = sys.create_vector();
   scratch_ = sys.create_vector();
+  acceleration_ = sys.create_vector();
+  accelerated_ = sys.create_vector();
   scene.initial_velocity(*v_);
   if (p_.rayleigh_stiffness > 0.0) K_start_ = sys.create_mesh_matrix();
 }
@@ -26,6 +28,7 @@ SolveReport Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial
   const double reach = midpoint ? 0.5 * h_ : h_;  // how far y lies from u_n, in time
   predictor_->update(1.0, u, reach, *v_, 0.0);
   trial.assign(*predictor_);
+  scene_.predict_acceleration(t0, t1, u, trial, reach / h_);
   if (midpoint) {
     // y's prescribed values: the averages of u_n's (those at t0) and those at t1.
     scratch_->assign(u);
@@ -39,8 +42,28 @@ SolveReport Dynamics::begin(double t0, double t1, const Vector& u, Vector& trial
   } else {
     scene_.apply_load(t1, trial);
   }
+  // Where forces that do not depend on u accelerate the body (gravity, a body force), the free DOFs may
+  // start reach^2 a further on (EnergyTerm::add_load_acceleration): a falling body is then in
+  // equilibrium at its first guess, where u_n + reach v_n leaves the whole of M a to the first Newton
+  // iteration (the squash's free fall: 2 iterations a substep, then none). Taken only where it lowers
+  // the step's energy: a body resting on a collider is held there, not accelerated, and pushing its
+  // contact into the collider cost each of the squash's resting substeps an iteration (1,460 Newton
+  // iterations in its 480 substeps with the acceleration always, 1,291 without, 1,245 chosen).
+  const bool accelerate = sys.load_acceleration(*acceleration_);
+  if (accelerate) {
+    accelerated_->assign(trial);
+    const std::vector<char> fixed = sys.fixed_owned_mask();
+    auto y = accelerated_->getLocalViewHost(Tpetra::Access::ReadWrite);
+    auto a = acceleration_->getLocalViewHost(Tpetra::Access::ReadOnly);
+    for (std::size_t i = 0; i < fixed.size(); ++i)
+      if (!fixed[i]) y(i, 0) += reach * reach * a(i, 0);
+  }
   if (K_start_) sys.elastic_hessian(u, *K_start_);
   inertia_->set_step(reach * reach, reach, *predictor_, u, p_.rayleigh_mass, K_start_.get(), p_.rayleigh_stiffness);
+  if (accelerate) {
+    const EvaluationTotals plain = sys.evaluate(trial, nullptr, nullptr), on = sys.evaluate(*accelerated_, nullptr, nullptr);
+    if (on.energy_defined() && !(plain.energy_defined() && plain.energy <= on.energy)) trial.assign(*accelerated_);
+  }
   return {};
 }
 

@@ -195,6 +195,13 @@ void Scene::predict(double t0, double t1, Vector& u) const {
   skeleton_->skin(t0, t1, X_.data(), free_, v.data(), system_->mesh().n_owned_nodes);
 }
 
+void Scene::predict_acceleration(double t0, double t1, const Vector& u, Vector& guess, double scale) const {
+  if (skeleton_->empty() || !skeleton_->skinning()) return;
+  auto g = guess.getLocalViewHost(Tpetra::Access::ReadWrite);
+  auto a = u.getLocalViewHost(Tpetra::Access::ReadOnly);
+  skeleton_->skin_acceleration(t0, t1, X_.data(), free_, a.data(), g.data(), scale, system_->mesh().n_owned_nodes);
+}
+
 void Scene::predict_run_up(double s0, double s1, Vector& u) const {
   if (skeleton_->empty() || !skeleton_->skinning()) return;
   auto v = u.getLocalViewHost(Tpetra::Access::ReadWrite);

@@ -804,6 +804,27 @@ void Skeleton::skin(double t0, double t1, const double* X, const std::vector<cha
   skin_by(M, X, free, u, owned);
 }
 
+void Skeleton::skin_acceleration(double t0, double t1, const double* X, const std::vector<char>& free, const double* u,
+                                 double* guess, double scale, std::size_t owned) const {
+  const double tp = std::max(0.0, t0 - (t1 - t0));
+  std::vector<Rigid> ahead(bones_.size()), back(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    const Rigid from = transform(b, t0).inverse();
+    ahead[b] = transform(b, t1).after(from);
+    back[b] = transform(b, tp).after(from);
+  }
+  for (std::size_t n = 0; n < owned; ++n) {
+    if (!free[n] || weights_[n].empty()) continue;
+    const std::array<double, 3> x{X[3 * n] + u[3 * n], X[3 * n + 1] + u[3 * n + 1], X[3 * n + 2] + u[3 * n + 2]};
+    std::array<double, 3> a{0.0, 0.0, 0.0};
+    for (const auto& [b, w] : weights_[n]) {
+      const auto y = ahead[b].apply(x), z = back[b].apply(x);
+      for (int i = 0; i < 3; ++i) a[i] += w * (y[i] + z[i] - 2.0 * x[i]);
+    }
+    for (int i = 0; i < 3; ++i) guess[3 * n + i] += scale * a[i];
+  }
+}
+
 void Skeleton::skin_run_up(double s0, double s1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const {
   std::vector<Rigid> M(bones_.size());
   for (std::size_t b = 0; b < bones_.size(); ++b) M[b] = run_up_pose(b, s1).after(run_up_pose(b, s0).inverse());

@@ -191,6 +191,15 @@ class EnergyTerm {
     (void)u;
     (void)guess;
   }
+  // A dynamic step's first guess (Dynamics::begin): a term whose force does not depend on u (external
+  // loads) adds to `a` (owned DOFs, interleaved xyz) the acceleration it alone gives each node, its
+  // nodal force over the node's lumped mass, and returns whether it added any. The guess then lies
+  // reach^2 a beyond the inertial predictor u_n + reach v_n, where a body in free fall is already in
+  // equilibrium (the inertia term's M (y - predictor) / reach^2 balances M a exactly).
+  virtual bool add_load_acceleration(Vector& a) const {
+    (void)a;
+    return false;
+  }
   // The tangent predictor linearises the total energy about the last state: a term set up at a state
   // (contact pairs found there) cannot be carried to a new one that way.
   virtual bool linearisable() const { return true; }

@@ -135,6 +135,9 @@ class System {
   // it: the free DOFs to 0.9 of the admissible fraction, the Dirichlet ones left where the guess has
   // them. Returns the fraction taken (1: the guess as it was). Collective.
   double admit_guess(const Vector& u, Vector& guess) const;
+  // The terms' accelerations of the nodes by forces that do not depend on u (EnergyTerm::
+  // add_load_acceleration), summed into `a` (overwritten); false, and `a` zero, when no term has any.
+  bool load_acceleration(Vector& a) const;
   // The tangent predictor may linearise the energy (every term allows it).
   bool linearisable() const;
   // log.csv's term columns ("<term>_energy" and each term's own), and their values at a step's end.

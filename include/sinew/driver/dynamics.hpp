@@ -41,6 +41,7 @@ class Dynamics final : public Stepper {
   double end_time_ = 1.0, h_ = 0.0;
   std::shared_ptr<InertiaTerm> inertia_;
   Teuchos::RCP<Vector> v_, predictor_, scratch_;
+  Teuchos::RCP<Vector> acceleration_, accelerated_;  // the loads' acceleration; the guess moved by it
   Teuchos::RCP<CrsMatrix> K_start_;  // for stiffness-proportional damping
 };
 

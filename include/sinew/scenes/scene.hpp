@@ -150,6 +150,11 @@ class Scene {
   // A better start for the step from load t0 to t1 than the state at t0: the free nodes carried along
   // by the bones' motion (linear-blend skinning), when there is a skeleton and skinning is on.
   void predict(double t0, double t1, Vector& u) const;
+  // A dynamic step's guess beside the inertial predictor u_n + h v_n: where the bones' motion over the
+  // step is not at the constant velocity that predictor assumes, the free nodes get the skinned motion's
+  // second difference too (Skeleton::skin_acceleration; scale 1 for u_n+1, 1/2 for the midpoint's y).
+  // Spring-held nodes then start near their targets instead of a bone's acceleration h^2 a behind.
+  void predict_acceleration(double t0, double t1, const Vector& u, Vector& guess, double scale) const;
   const Skeleton& skeleton() const { return *skeleton_; }
 
   // The run-up before step 1 (skeleton.hpp): its steps, the bones at s of the way from the rest pose to

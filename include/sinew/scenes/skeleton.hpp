@@ -202,6 +202,11 @@ class Skeleton {
   // Carries the free owned nodes of displacement `u` (interleaved xyz, owned nodes) from load t0 to t1
   // by linear-blend skinning. X: reference coordinates of local nodes; free[n]: node n is not attached.
   void skin(double t0, double t1, const double* X, const std::vector<char>& free, double* u, std::size_t owned) const;
+  // A dynamic step's guess: adds scale times the skinned motion's second difference at the state x_n
+  // (X + u_n), sum_b w_b [T_b(t1) + T_b(tp)] T_b(t0)^-1 x_n - 2 x_n, to the free owned nodes of `guess`;
+  // tp = t0 - (t1 - t0), no earlier than load 0. See Scene::predict_acceleration.
+  void skin_acceleration(double t0, double t1, const double* X, const std::vector<char>& free, const double* u, double* guess,
+                         double scale, std::size_t owned) const;
   bool skinning() const { return skinning_; }
   // A skeleton from a rig: joints whose capsule held no node, and the largest entry by which a joint's
   // motion departed from a rotation (made rigid by polar decomposition).

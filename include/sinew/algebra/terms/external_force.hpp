@@ -23,6 +23,9 @@ class ExternalForceTerm final : public EnergyTerm {
   bool allows_node_relaxation(std::vector<char>&) const override { return true; }
   // The loads at load fraction t: t times the full ones when ramped (quasi-static), else in full.
   void set_load(double t) override;
+  // g + V_a b / m_a at each node with mass: exact for the consistent mass matrix too (its rows sum to
+  // m_a), for uniform density.
+  bool add_load_acceleration(Vector& a) const override;
 
   // The full loads and whether set_load ramps them.
   void set_full(const std::array<double, 3>& b, const std::array<double, 3>& g, bool ramped);
@@ -33,6 +36,7 @@ class ExternalForceTerm final : public EnergyTerm {
 
  private:
   Kokkos::View<double*, DeviceMemory> volume_, mass_;
+  std::vector<double> host_volume_, host_mass_;  // the same, for add_load_acceleration
   std::array<double, 3> body_{{0.0, 0.0, 0.0}}, gravity_{{0.0, 0.0, 0.0}};
   std::array<double, 3> full_body_{{0.0, 0.0, 0.0}}, full_gravity_{{0.0, 0.0, 0.0}};
   bool ramped_ = true;
