@@ -494,27 +494,19 @@ TEST(Skeleton, ADynamicStepsGuessAddsTheSkinnedAccelerationOfTheBones) {
   // predictor u_n + h v_n carries the flesh on at the old speed; a flesh that moved with its skin must
   // start the step at the skin's new place: the predictor plus the skinned second difference
   // (Scene::predict_acceleration), exact for translations whatever the blend of weights.
-  const std::string skeleton = R"x(
-  <ParameterList name="Skeleton">
-    <ParameterList name="Bones">
-      <ParameterList name="bottom"><Parameter name="Region" type="string" value="group bottom"/>
-        <ParameterList name="Keyframes">
+  // A bone of a face group, translated to `half` at load 0.5 and to `full` at 1.
+  auto bone = [](const std::string& group, const std::string& half, const std::string& full) {
+    return R"x(<ParameterList name=")x" + group + R"x("><Parameter name="Region" type="string" value="group )x" + group +
+           R"x("/><ParameterList name="Keyframes">
           <ParameterList name="a"><Parameter name="Time" type="double" value="0.5"/>
-            <Parameter name="Translation" type="Array(double)" value="{0, 0, 0.1}"/></ParameterList>
+            <Parameter name="Translation" type="Array(double)" value=")x" + half + R"x("/></ParameterList>
           <ParameterList name="b"><Parameter name="Time" type="double" value="1.0"/>
-            <Parameter name="Translation" type="Array(double)" value="{0, 0.1, 0.3}"/></ParameterList>
-        </ParameterList>
-      </ParameterList>
-      <ParameterList name="top"><Parameter name="Region" type="string" value="group top"/>
-        <ParameterList name="Keyframes">
-          <ParameterList name="a"><Parameter name="Time" type="double" value="0.5"/>
-            <Parameter name="Translation" type="Array(double)" value="{0.1, 0, 0}"/></ParameterList>
-          <ParameterList name="b"><Parameter name="Time" type="double" value="1.0"/>
-            <Parameter name="Translation" type="Array(double)" value="{0.4, 0, 0.05}"/></ParameterList>
-        </ParameterList>
-      </ParameterList>
-    </ParameterList>
-  </ParameterList>)x";
+            <Parameter name="Translation" type="Array(double)" value=")x" + full + R"x("/></ParameterList>
+        </ParameterList></ParameterList>)x";
+  };
+  const std::string skeleton = R"x(<ParameterList name="Skeleton"><ParameterList name="Bones">)x" +
+                               bone("bottom", "{0, 0, 0.1}", "{0, 0.1, 0.3}") + bone("top", "{0.1, 0, 0}", "{0.4, 0, 0.05}") +
+                               "</ParameterList></ParameterList>";
   Simulation sim(config(box_scene("box_v41.msh", "stable-neohookean", 0.3, "", skeleton, 4), "test_results/skin_acceleration" + tag()),
                  RunOptions{true, ""});
   Scene& scene = sim.scene();
