@@ -16,10 +16,7 @@ Kokkos::View<double*, DeviceMemory> device_copy(const std::vector<double>& v, co
 }  // namespace
 
 ExternalForceTerm::ExternalForceTerm(const std::vector<double>& nodal_volume, const std::vector<double>& nodal_mass)
-    : volume_(device_copy(nodal_volume, "nodal volume")),
-      mass_(device_copy(nodal_mass, "nodal mass")),
-      host_volume_(nodal_volume),
-      host_mass_(nodal_mass) {}
+    : volume_(device_copy(nodal_volume, "nodal volume")), mass_(device_copy(nodal_mass, "nodal mass")) {}
 
 bool ExternalForceTerm::active() const {
   for (int i = 0; i < 3; ++i)
@@ -50,10 +47,13 @@ void ExternalForceTerm::add(const TermInput& in, TermOutput& out) const {
 
 bool ExternalForceTerm::add_load_acceleration(Vector& a) const {
   if (!active()) return false;
+  // Host mirrors of the nodal volumes and masses: the views themselves where memory is host-accessible.
+  const auto V = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), volume_);
+  const auto m = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), mass_);
   auto h = a.getLocalViewHost(Tpetra::Access::ReadWrite);
-  for (std::size_t n = 0; n < host_mass_.size(); ++n) {
-    if (!(host_mass_[n] > 0.0)) continue;
-    for (int c = 0; c < 3; ++c) h(3 * n + c, 0) += gravity_[c] + host_volume_[n] * body_[c] / host_mass_[n];
+  for (std::size_t n = 0; n < m.extent(0); ++n) {
+    if (!(m(n) > 0.0)) continue;
+    for (int c = 0; c < 3; ++c) h(3 * n + c, 0) += gravity_[c] + V(n) * body_[c] / m(n);
   }
   return true;
 }

@@ -36,7 +36,6 @@ class ExternalForceTerm final : public EnergyTerm {
 
  private:
   Kokkos::View<double*, DeviceMemory> volume_, mass_;
-  std::vector<double> host_volume_, host_mass_;  // the same, for add_load_acceleration
   std::array<double, 3> body_{{0.0, 0.0, 0.0}}, gravity_{{0.0, 0.0, 0.0}};
   std::array<double, 3> full_body_{{0.0, 0.0, 0.0}}, full_gravity_{{0.0, 0.0, 0.0}};
   bool ramped_ = true;
