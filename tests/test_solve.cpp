@@ -778,6 +778,37 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
               capped.newton, free.newton, capped.longest, free.longest);
 }
 
+TEST(Solve, WhereTheEnergyCannotTellAStepFromNoneTheSlopesAlongItStillLengthenIt) {
+  // The same projected twist solved far below where its energy changes by more than roundoff: near
+  // convergence a step changes the energy by about |F|^2 / k, below 1e-11 of the energy, so the energy
+  // cannot say whether a longer step would be better, and steps of exactly 1 used to follow (linear
+  // convergence at the projection's rate). The slopes along the direction, F(x + t d) . d, still can.
+  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
+  std::vector<NewtonIterate> its;
+  const std::string entries = R"x(<Parameter name="Exact Hessian below" type="double" value="0.0"/>
+      <Parameter name="Preconditioner update" type="string" value="every Newton iteration"/>)x";
+  SceneConfig c = config(std::regex_replace(twist_xml(1.5708, 1, "hex8", entries),
+                                            std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49),
+                         "test_results/solve_blind" + tag());
+  c.params.solver.absolute_tolerance = 1e-13;
+  LoadedScene s(c);
+  const SolveReport r = s.solver.solve(*s.u, [&](const NewtonIterate& it) { its.push_back(it); });
+  EXPECT_TRUE(r.converged()) << r.reason();
+  // Below |F| 1e-7 every step was exactly 1 without the slopes (20 iterations, |F| 0.3 of the last
+  // each); with them 16, several of them longer.
+  int lengthened = 0;
+  for (std::size_t i = 1; i < its.size(); ++i) {
+    if (!(its[i - 1].residual < 1e-7)) continue;
+    EXPECT_LE(its[i].step, 2.0) << "beyond 'Maximum step' at iteration " << its[i].iteration;
+    if (its[i].step > 1.25) {
+      ++lengthened;
+      EXPECT_LT(its[i].residual, its[i - 1].residual) << "a lengthened step raised |F| at iteration " << its[i].iteration;
+    }
+  }
+  EXPECT_GE(lengthened, 2);
+  std::printf("Newton iterations %d, steps lengthened below |F| 1e-7: %d\n", r.newton_iterations, lengthened);
+}
+
 // Each Newton iteration reports its direction's largest entry (NewtonIterate::direction_max, the log's
 // |du|): on a small twist, nearly linear, the first direction is nearly the whole way (its largest entry
 // within 5% of the largest displacement solved for), and the steps times the reported entries bound the
