@@ -587,29 +587,24 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   double extend(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir, double t1,
                 double E0, double slope, double E1, double limit) const {
     const SolveState& state = model_.state();
-    double best = t1, Ebest = E1, evaluated = t1;
+    double Ebest = E1;
     // Sliding off a saddle (HessianPolicy::saddle(), nothing inverted) the energy keeps falling along
     // the projected directions beyond any cap, and steps capped at 2 let the slide take 30 iterations of
     // growing residual on the corotational human's fourth step (10 at 4 times the cap; that step 92 -> 49
     // Newton iterations with this alone). Not near inverted points: there long steps undo too much.
     const double cap = std::min(limit, state.policy.saddle() && state.last.inverted == 0 ? saddle_factor * max_step_ : max_step_);
-    for (int k = 0; k < max_extensions; ++k) {
-      const double c = (Ebest - E0 - slope * best) / (best * best);
-      const double next = std::min(cap, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);
-      if (!(next > extend_beyond * best)) break;
-      grp.computeX(old, dir, next);
-      grp.computeF();
-      evaluated = next;
-      const double E = state.last.energy;
-      if (!std::isfinite(E) || state.last.undefined > 0 || !(E < Ebest) || !(E <= E0 + 1e-4 * next * slope)) break;
-      best = next;
-      Ebest = E;
-    }
-    if (evaluated != best) {  // the group holds a rejected trial: back to the best step
-      grp.computeX(old, dir, best);
-      grp.computeF();
-    }
-    return best;
+    return lengthen(
+        grp, old, dir, t1,
+        [&](double best) {
+          const double c = (Ebest - E0 - slope * best) / (best * best);
+          return std::min(cap, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);
+        },
+        [&](double next) {
+          const double E = state.last.energy;
+          if (!(E < Ebest) || !(E <= E0 + 1e-4 * next * slope)) return false;
+          Ebest = E;
+          return true;
+        });
   }
 
   // The same where the energy is blind (its change within 1e-11 of it: near convergence), from the
@@ -622,22 +617,41 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   // then that tier, 0.009).
   double extend_by_slopes(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir,
                           double t1, double slope, double limit) const {
-    const SolveState& state = model_.state();
     const double cap = std::min(limit, max_step_);
-    double ta = 0.0, ga = slope, best = t1, gbest = grp.getF().innerProduct(dir), evaluated = t1;
-    for (int k = 0; k < max_extensions && gbest < 0.0; ++k) {
-      const double next = std::min(cap, gbest > ga ? best - gbest * (best - ta) / (gbest - ga) : 2.0 * best);
+    double ta = 0.0, ga = slope, tb = t1, gb = grp.getF().innerProduct(dir);
+    return lengthen(
+        grp, old, dir, t1,
+        [&](double best) {
+          if (!(gb < 0.0)) return 0.0;  // at or past the minimum already
+          return std::min(cap, gb > ga ? best - gb * (best - ta) / (gb - ga) : 2.0 * best);
+        },
+        [&](double next) {
+          const double g = grp.getF().innerProduct(dir);
+          if (!std::isfinite(g) || !((next - tb) * (gb + g) < 0.0)) return false;
+          ta = tb;
+          ga = gb;
+          tb = next;
+          gb = g;
+          return true;
+        });
+  }
+
+  // Longer trials along `dir` after the accepted step t1: `propose(best)` gives the next (stop unless it
+  // lies extend_beyond past the best), `accept(next)`, called with the group evaluated there, whether it
+  // is better. The group is left at the best step, which is returned.
+  template <class Propose, class Accept>
+  double lengthen(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir, double t1,
+                  Propose propose, Accept accept) const {
+    const SolveState& state = model_.state();
+    double best = t1, evaluated = t1;
+    for (int k = 0; k < max_extensions; ++k) {
+      const double next = propose(best);
       if (!(next > extend_beyond * best)) break;
       grp.computeX(old, dir, next);
       grp.computeF();
       evaluated = next;
-      if (!std::isfinite(state.last.energy) || state.last.undefined > 0) break;
-      const double g = grp.getF().innerProduct(dir);
-      if (!std::isfinite(g) || !((next - best) * (gbest + g) < 0.0)) break;
-      ta = best;
-      ga = gbest;
+      if (!std::isfinite(state.last.energy) || state.last.undefined > 0 || !accept(next)) break;
       best = next;
-      gbest = g;
     }
     if (evaluated != best) {  // the group holds a rejected trial: back to the best step
       grp.computeX(old, dir, best);
