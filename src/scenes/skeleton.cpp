@@ -249,8 +249,9 @@ void Skeleton::bones_from_rig(const SkeletonParameters& p, const Mesh& mesh, con
     bones_.push_back(std::move(bone));
   }
   if (bones_.empty())
-    throw InputError(where + ": no joint of " + p.rig + " holds a lattice node (the cells are " + std::to_string(h) +
-                     " m; 'sinew --check' lists each joint and why)");
+    throw InputError(where + ": no joint of " + p.rig +
+                     " holds enough lattice nodes to be a bone (two; one with capsules or a 'Bone radius'; the cells are " +
+                     std::to_string(h) + " m; 'sinew --check' lists each joint and why)");
   if (p.rig_weights) rig_weights_ = skin_weights(mesh, skin);
 }
 
