@@ -307,13 +307,18 @@ TEST(Solve, EveryProjectionOnHexAndTetReachesTheSameState) {
   }
 }
 
+// twist_xml's cube at nu = 0.49 (nearly incompressible), twisted by `angle` in one step.
+static std::string nu49_twist_xml(double angle, const std::string& extra_solver) {
+  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
+  return std::regex_replace(twist_xml(angle, 1, "hex8", extra_solver),
+                            std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
+}
+
 // A 4.5 rad twist in one step at nu = 0.49 with 'Exact Hessian below' = `below`, and an update of the
 // preconditioner per Jacobian, so that the measured path is the Hessian policy's alone.
 static std::string eager_twist_xml(const char* below) {
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
-  return std::regex_replace(twist_xml(4.5, 1, "hex8", std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
-                                                          "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>"),
-                            std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
+  return nu49_twist_xml(4.5, std::string(R"x(<Parameter name="Exact Hessian below" type="double" value=")x") + below +
+                                 "\"/><Parameter name=\"Preconditioner update\" type=\"string\" value=\"every Newton iteration\"/>");
 }
 
 TEST(Solve, ExactHessianFallsBackToProjectionAndConverges) {
@@ -742,7 +747,6 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
   // and Newton converges linearly. 'Maximum step' lets the line search go on to the energy's minimum
   // along the direction, up to that many Newton steps: fewer iterations, the same end state, and never
   // a step beyond the cap (1: never beyond the Newton step).
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
   struct Path {
     int newton = 0;
     double longest = 0.0;
@@ -752,9 +756,7 @@ TEST(Solve, TheLineSearchStepsBeyondNewtonWhereTheFullStepLowersTheEnergyAlmostL
     const std::string entries = R"x(<Parameter name="Exact Hessian below" type="double" value="0.0"/>
         <Parameter name="Preconditioner update" type="string" value="every Newton iteration"/>
         <Parameter name="Maximum step" type="double" value=")x" + std::to_string(max_step) + "\"/>";
-    SceneConfig c = config(std::regex_replace(twist_xml(1.5708, 1, "hex8", entries),
-                                              std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49),
-                           "test_results/solve_extend" + tag());
+    SceneConfig c = config(nu49_twist_xml(1.5708, entries), "test_results/solve_extend" + tag());
     LoadedScene s(c);
     Path p;
     const SolveReport r = s.solver.solve(*s.u, [&](const NewtonIterate& it) { p.longest = std::max(p.longest, it.step); });
@@ -783,13 +785,10 @@ TEST(Solve, WhereTheEnergyCannotTellAStepFromNoneTheSlopesAlongItStillLengthenIt
   // convergence a step changes the energy by about |F|^2 / k, below 1e-11 of the energy, so the energy
   // cannot say whether a longer step would be better, and steps of exactly 1 used to follow (linear
   // convergence at the projection's rate). The slopes along the direction, F(x + t d) . d, still can.
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
   std::vector<NewtonIterate> its;
   const std::string entries = R"x(<Parameter name="Exact Hessian below" type="double" value="0.0"/>
       <Parameter name="Preconditioner update" type="string" value="every Newton iteration"/>)x";
-  SceneConfig c = config(std::regex_replace(twist_xml(1.5708, 1, "hex8", entries),
-                                            std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49),
-                         "test_results/solve_blind" + tag());
+  SceneConfig c = config(nu49_twist_xml(1.5708, entries), "test_results/solve_blind" + tag());
   c.params.solver.absolute_tolerance = 1e-13;
   LoadedScene s(c);
   const SolveReport r = s.solver.solve(*s.u, [&](const NewtonIterate& it) { its.push_back(it); });
@@ -841,14 +840,10 @@ TEST(Solve, EachIterationReportsHowFarItsNewtonDirectionGoes) {
 TEST(Solve, NoxBacktrackSettingsGovernTheEnergyLineSearch) {
   // A 3.14 rad twist at nu = 0.49 needs a half step in its first Newton iteration (measured). With
   // NOX's own "Backtrack" list allowing one trial only, the energy line search must fail there.
-  const std::string nu49 = R"x(<Parameter name="Poisson ratio" type="double" value="0.49"/>)x";
   const std::string one_try = R"x(<ParameterList name="NOX"><ParameterList name="Line Search"><ParameterList name="Backtrack">
       <Parameter name="Max Iters" type="int" value="1"/></ParameterList></ParameterList></ParameterList>)x";
-  auto xml = [&](const std::string& extra) {
-    return std::regex_replace(twist_xml(3.14, 1, "hex8", extra), std::regex(R"x(<Parameter name="Poisson ratio" type="double" value="0.45"/>)x"), nu49);
-  };
   for (const bool limited : {false, true}) {
-    SceneConfig c = config(xml(limited ? one_try : ""), "test_results/solve_bt" + tag());
+    SceneConfig c = config(nu49_twist_xml(3.14, limited ? one_try : ""), "test_results/solve_bt" + tag());
     LoadedScene s(c);
     const SolveReport r = s.solver.solve(*s.u);
     if (limited)
