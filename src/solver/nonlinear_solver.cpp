@@ -599,7 +599,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
           const double c = (Ebest - E0 - slope * best) / (best * best);
           return std::min(cap, c > 0.0 ? -slope / (2.0 * c) : 2.0 * best);
         },
-        [&](double next) {
+        [&](double, double next) {
           const double E = state.last.energy;
           if (!(E < Ebest) || !(E <= E0 + 1e-4 * next * slope)) return false;
           Ebest = E;
@@ -618,27 +618,26 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
   double extend_by_slopes(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir,
                           double t1, double slope, double limit) const {
     const double cap = std::min(limit, max_step_);
-    double ta = 0.0, ga = slope, tb = t1, gb = grp.getF().innerProduct(dir);
+    double ta = 0.0, ga = slope, gb = grp.getF().innerProduct(dir);  // the last two steps' slopes (gb: the best's)
     return lengthen(
         grp, old, dir, t1,
         [&](double best) {
           if (!(gb < 0.0)) return 0.0;  // at or past the minimum already
           return std::min(cap, gb > ga ? best - gb * (best - ta) / (gb - ga) : 2.0 * best);
         },
-        [&](double next) {
+        [&](double best, double next) {
           const double g = grp.getF().innerProduct(dir);
-          if (!std::isfinite(g) || !((next - tb) * (gb + g) < 0.0)) return false;
-          ta = tb;
+          if (!std::isfinite(g) || !((next - best) * (gb + g) < 0.0)) return false;
+          ta = best;
           ga = gb;
-          tb = next;
           gb = g;
           return true;
         });
   }
 
   // Longer trials along `dir` after the accepted step t1: `propose(best)` gives the next (stop unless it
-  // lies extend_beyond past the best), `accept(next)`, called with the group evaluated there, whether it
-  // is better. The group is left at the best step, which is returned.
+  // lies extend_beyond past the best), `accept(best, next)`, called with the group evaluated at next,
+  // whether it is better. The group is left at the best step, which is returned.
   template <class Propose, class Accept>
   double lengthen(NOX::Abstract::Group& grp, const NOX::Abstract::Group& old, const NOX::Abstract::Vector& dir, double t1,
                   Propose propose, Accept accept) const {
@@ -650,7 +649,7 @@ class EnergyBacktrack : public NOX::LineSearch::Generic {
       grp.computeX(old, dir, next);
       grp.computeF();
       evaluated = next;
-      if (!std::isfinite(state.last.energy) || state.last.undefined > 0 || !accept(next)) break;
+      if (!std::isfinite(state.last.energy) || state.last.undefined > 0 || !accept(best, next)) break;
       best = next;
     }
     if (evaluated != best) {  // the group holds a rejected trial: back to the best step
